@@ -1,0 +1,12 @@
+"""Pure-functional JAX environments with novelties, and their planner models."""
+from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, SkillCall, SkillSpec
+from envs_jax.light_switch_door import LightSwitchDoor
+
+ENVS = {LightSwitchDoor.name: LightSwitchDoor}
+
+
+def env_class(name: str) -> type[NoveltyEnv]:
+    """The env class registered under `name`; ValueError naming the choices otherwise."""
+    if name not in ENVS:
+        raise ValueError(f"unknown env {name!r}; choose from {', '.join(sorted(ENVS))}")
+    return ENVS[name]

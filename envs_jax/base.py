@@ -1,0 +1,113 @@
+"""The environment interface shared by Light Switch Door, Doorknobs and Coffee.
+
+An environment is a frozen (hashable) object holding only static configuration, chiefly the padded
+capacity (max cells, rooms, cups...) that fixes every array shape, so it can be a static argument of
+`jax.jit`. Everything that changes is in pytrees:
+
+* host: `train_task(seed)`, `test_tasks(seed, n)` draw task specs with numpy from the seed;
+  `task_arrays(spec)` pads one spec into the env's `Task` struct; `planner_problem(spec)` states the
+  planner's STRIPS problem (which omits the novelty).
+* device, pure and vmappable: `reset(task) -> State`, `step(state, action) -> State`,
+  `abstract(state) -> bool[num_atoms]` (fluent atoms in a fixed layout), `goal_reached(state)`,
+  `state_vector(state)` (the low-level state, for "did anything change"), `features(state, stuck_state)`
+  (the bridge's object-centric observation), and the skills: `skill_action(state, call)`,
+  `skill_done(prev_state, state, call)`, `skill_initiable(state)`.
+
+Skills are parameterised options. A ground skill is (skill id, slot, param): the slot picks the object
+the skill acts on (MoveRobot's target cell, MoveToDoor's door), the param is its continuous argument,
+drawn from the skill's sampler: uniform in [param_low, param_high] (equal bounds = a constant).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+
+@dataclass(frozen=True)
+class SkillSpec:
+    name: str
+    param_low: float = 0.0  # the NSRT sampler: uniform in [low, high]; low == high is a constant
+    param_high: float = 0.0
+
+
+@struct.dataclass
+class SkillCall:
+    """A ground skill being executed, with what a closed-loop skill may need to remember."""
+
+    skill: jax.Array  # int32
+    slot: jax.Array  # int32
+    param: jax.Array  # float32
+    running: jax.Array  # bool: started and not yet terminated
+    steps: jax.Array  # int32: env steps taken so far by this call
+
+
+@struct.dataclass
+class BridgeObs:
+    """What a bridge policy sees when it must choose."""
+
+    features: jax.Array  # float32[num_features]: the env's object-centric features
+    num_ground: jax.Array  # int32[num_skills + 1]: applicable ground instances per skill, CallPlanner last
+
+
+@struct.dataclass
+class BridgeAction:
+    """A bridge's choice: a skill (num_skills = CallPlanner) and its continuous parameter."""
+
+    skill: jax.Array  # int32
+    param: jax.Array  # float32
+
+
+def idle_call() -> SkillCall:
+    return SkillCall(skill=jnp.int32(0), slot=jnp.int32(0), param=jnp.float32(0.0),
+                     running=jnp.bool_(False), steps=jnp.int32(0))
+
+
+def tree_where(cond: jax.Array, a: Any, b: Any) -> Any:
+    """Branch-free select between two pytrees of the same structure."""
+    return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
+
+
+def stack_trees(trees: list[Any]) -> Any:
+    """Stack pytrees of numpy/jax leaves on a new leading axis (device arrays)."""
+    return jax.tree.map(lambda *xs: jnp.asarray(np.stack(xs)), *trees)
+
+
+class NoveltyEnv:
+    """Base class: shared skill bookkeeping. Subclasses are frozen dataclasses (see module doc)."""
+
+    name: ClassVar[str]
+    skills: ClassVar[tuple[SkillSpec, ...]]
+    action_dim: ClassVar[int]
+    num_features: ClassVar[int]
+
+    # ---- skills ---------------------------------------------------------------------------------
+    @property
+    def num_skills(self) -> int:
+        return len(self.skills)
+
+    @property
+    def skill_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.skills)
+
+    def skill_index(self, name: str) -> int:
+        return self.skill_names.index(name)
+
+    def sample_params(self, key: jax.Array, shape: tuple[int, ...] = ()) -> jax.Array:
+        """float32[*shape, num_skills]: one draw from every skill's parameter sampler."""
+        low = jnp.array([s.param_low for s in self.skills], jnp.float32)
+        high = jnp.array([s.param_high for s in self.skills], jnp.float32)
+        u = jax.random.uniform(key, shape + (self.num_skills,))
+        return low + (high - low) * u
+
+    def skill_initiable(self, state) -> jax.Array:
+        """bool[num_skills, num_slots]; skills whose initiation needs more than preconditions override."""
+        return jnp.ones((self.num_skills, self.num_slots), bool)
+
+    # ---- tasks ------------------------------------------------------------------------------------
+    def stack_tasks(self, specs: list) -> Any:
+        return stack_trees([self.task_arrays(s) for s in specs])

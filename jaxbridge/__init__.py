@@ -1,0 +1,1 @@
+"""jaxbridge: planner + learned bridge policy, vectorised in JAX."""

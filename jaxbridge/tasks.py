@@ -1,0 +1,53 @@
+"""Batches of tasks ready for the device: padded task arrays, plan tables and horizons."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import jax.numpy as jnp
+import numpy as np
+
+from envs_jax.base import NoveltyEnv
+from planner.tables import CompiledTask, PlanTable, compile_task, stack_tables
+
+
+@dataclass
+class TaskBatch:
+    """B tasks of one env, padded to one capacity: everything a rollout needs, plus host views."""
+
+    env: NoveltyEnv
+    specs: list
+    seeds: np.ndarray  # int[B]: the seed each task belongs to
+    compiled: list[CompiledTask]
+    tasks: Any  # the env's Task struct, leading axis B
+    tables: PlanTable  # leading axis B
+    horizons: jnp.ndarray  # int32[B]
+
+    @property
+    def size(self) -> int:
+        return len(self.specs)
+
+    @property
+    def max_steps(self) -> int:
+        return int(np.max(np.asarray(self.horizons)))
+
+
+def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizons: list[int] | None = None,
+               env: NoveltyEnv | None = None) -> TaskBatch:
+    """Pad and compile `specs` (test horizons by default) for an env sized to fit them all."""
+    env = env or env_cls.for_tasks(specs)
+    compiled = [compile_task(env, s) for s in specs]
+    horizons = [s.horizon for s in specs] if horizons is None else horizons
+    return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(seeds), compiled=compiled,
+                     tasks=env.stack_tasks(specs), tables=stack_tables(compiled),
+                     horizons=jnp.asarray(horizons, jnp.int32))
+
+
+def test_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10) -> TaskBatch:
+    """Every seed's test tasks in one batch (seed-major order)."""
+    specs, owners = [], []
+    for seed in seeds:
+        tasks = env_cls.test_tasks(seed, num_tasks)
+        specs += tasks
+        owners += [seed] * len(tasks)
+    return make_batch(env_cls, specs, owners)

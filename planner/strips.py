@@ -1,0 +1,131 @@
+"""A small typed STRIPS model: lifted operators, naive grounding, and PDDL text.
+
+Each environment states its planner model (the operators of envs.md, which leave the novelty out) as
+`LiftedOperator`s. Grounding binds them to one task's objects and drops every binding whose static
+preconditions (predicates that no operator adds or deletes) are false, as a naive grounder does.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+Atom = tuple[str, ...]  # ("RobotInCell", "robby", "cell3"); variables start with "?"
+
+
+@dataclass(frozen=True)
+class LiftedOperator:
+    """A STRIPS operator over typed variables, executed by the skill `skill`.
+
+    `slot_param` names the variable whose object picks the skill's ground slot (e.g. MoveRobot's target
+    cell); None for skills with a single ground instance.
+    """
+
+    name: str
+    params: tuple[tuple[str, str], ...]  # (variable, type)
+    pre: tuple[Atom, ...]
+    add: tuple[Atom, ...]
+    delete: tuple[Atom, ...]
+    skill: str
+    slot_param: str | None = None
+
+
+@dataclass(frozen=True)
+class Domain:
+    name: str
+    types: tuple[str, ...]
+    predicates: dict[str, tuple[str, ...]]  # predicate name -> argument types
+    operators: tuple[LiftedOperator, ...]
+
+    @property
+    def fluent_predicates(self) -> frozenset[str]:
+        """Predicates some operator changes; every other predicate is static."""
+        return frozenset(a[0] for op in self.operators for a in op.add + op.delete)
+
+
+@dataclass(frozen=True)
+class Problem:
+    domain: Domain
+    objects: dict[str, str]  # object name -> type, in a fixed order
+    static: frozenset[Atom]
+    init: frozenset[Atom]  # fluent atoms true at the start
+    goal: frozenset[Atom]
+
+
+@dataclass(frozen=True)
+class GroundOperator:
+    name: str
+    args: tuple[str, ...]
+    pre: frozenset[Atom]  # fluent preconditions only (static ones were checked when grounding)
+    add: frozenset[Atom]
+    delete: frozenset[Atom]
+    skill: str
+    slot_object: str | None
+
+    def __str__(self) -> str:
+        return f"{self.name}({', '.join(self.args)})"
+
+
+def _bind(atoms: tuple[Atom, ...], binding: dict[str, str]) -> frozenset[Atom]:
+    return frozenset((a[0],) + tuple(binding.get(x, x) for x in a[1:]) for a in atoms)
+
+
+def ground(problem: Problem) -> list[GroundOperator]:
+    """All bindings of every operator whose static preconditions hold, in a deterministic order."""
+    fluent = problem.domain.fluent_predicates
+    by_type: dict[str, list[str]] = {}
+    for name, typ in problem.objects.items():
+        by_type.setdefault(typ, []).append(name)
+    ops = []
+    for op in problem.domain.operators:
+        variables = [v for v, _ in op.params]
+        choices = [by_type.get(t, []) for _, t in op.params]
+        static_pre = tuple(a for a in op.pre if a[0] not in fluent)
+        fluent_pre = tuple(a for a in op.pre if a[0] in fluent)
+        for values in itertools.product(*choices):
+            binding = dict(zip(variables, values))
+            if not _bind(static_pre, binding) <= problem.static:
+                continue
+            ops.append(GroundOperator(
+                name=op.name, args=tuple(values), pre=_bind(fluent_pre, binding),
+                add=_bind(op.add, binding), delete=_bind(op.delete, binding), skill=op.skill,
+                slot_object=binding[op.slot_param] if op.slot_param else None))
+    return ops
+
+
+# ------------------------------------------------------------------------------------------------ PDDL
+
+
+def _pddl_atom(atom: Atom) -> str:
+    return "(" + " ".join(atom) + ")"
+
+
+def _pddl_and(atoms) -> str:
+    return "(and " + " ".join(atoms) + ")"
+
+
+def domain_pddl(domain: Domain) -> str:
+    """The domain as PDDL text (:strips :typing), e.g. for an external planner."""
+    preds = []
+    for name, types in domain.predicates.items():
+        args = " ".join(f"?a{i} - {t}" for i, t in enumerate(types))
+        preds.append(f"({name} {args})".replace(" )", ")"))
+    actions = []
+    for op in domain.operators:
+        params = " ".join(f"{v} - {t}" for v, t in op.params)
+        effect = [_pddl_atom(a) for a in op.add] + [f"(not {_pddl_atom(a)})" for a in op.delete]
+        actions.append(
+            f"  (:action {op.name}\n    :parameters ({params})\n"
+            f"    :precondition {_pddl_and(_pddl_atom(a) for a in op.pre)}\n"
+            f"    :effect {_pddl_and(effect)})")
+    return (f"(define (domain {domain.name})\n  (:requirements :strips :typing)\n"
+            f"  (:types {' '.join(domain.types)})\n  (:predicates {' '.join(preds)})\n"
+            + "\n".join(actions) + ")\n")
+
+
+def problem_pddl(problem: Problem, name: str = "task") -> str:
+    """The problem as PDDL text: objects, static and fluent initial atoms, goal."""
+    objects = " ".join(f"{o} - {t}" for o, t in problem.objects.items())
+    init = " ".join(_pddl_atom(a) for a in sorted(problem.static | problem.init))
+    goal = _pddl_and(_pddl_atom(a) for a in sorted(problem.goal))
+    return (f"(define (problem {name}) (:domain {problem.domain.name})\n  (:objects {objects})\n"
+            f"  (:init {init})\n  (:goal {goal}))\n")
