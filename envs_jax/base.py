@@ -97,16 +97,21 @@ class NoveltyEnv:
     def skill_index(self, name: str) -> int:
         return self.skill_names.index(name)
 
-    def sample_params(self, key: jax.Array, shape: tuple[int, ...] = ()) -> jax.Array:
-        """float32[*shape, num_skills]: one draw from every skill's parameter sampler."""
+    def param_from_uniform(self, skill: jax.Array, u: jax.Array) -> jax.Array:
+        """Skill `skill`'s parameter sampler applied to a uniform draw u in [0, 1)."""
         low = jnp.array([s.param_low for s in self.skills], jnp.float32)
         high = jnp.array([s.param_high for s in self.skills], jnp.float32)
-        u = jax.random.uniform(key, shape + (self.num_skills,))
-        return low + (high - low) * u
+        return low[skill] + (high[skill] - low[skill]) * u
 
-    def skill_initiable(self, state) -> jax.Array:
-        """bool[num_skills, num_slots]; skills whose initiation needs more than preconditions override."""
-        return jnp.ones((self.num_skills, self.num_slots), bool)
+    def sample_params(self, key: jax.Array, shape: tuple[int, ...] = ()) -> jax.Array:
+        """float32[*shape, num_skills]: one draw from every skill's parameter sampler."""
+        u = jax.random.uniform(key, shape + (self.num_skills,))
+        return self.param_from_uniform(jnp.arange(self.num_skills), u)
+
+    def skill_initiable(self, state, skill: jax.Array, slot: jax.Array) -> jax.Array:
+        """bool[...]: ground skills (broadcast shapes) that can start in `state`. Preconditions are
+        checked by the planner model; envs whose skills need more (a motion plan) override this."""
+        return jnp.ones(jnp.broadcast_shapes(skill.shape, slot.shape), bool)
 
     # ---- tasks ------------------------------------------------------------------------------------
     def stack_tasks(self, specs: list) -> Any:

@@ -56,10 +56,14 @@ class Episode:
 
 
 @struct.dataclass
-class BridgeTurn:
-    decide: jax.Array  # bool: the bridge must choose this step
-    obs: BridgeObs
-    slot_mask: jax.Array  # bool[num_skills, num_slots]: applicable ground instances
+class Decision:
+    """The bridge's choice for one episode, grounded on the task's objects."""
+
+    skill: jax.Array  # int32; num_skills = CallPlanner
+    slot: jax.Array  # int32
+    param: jax.Array  # float32
+    features: jax.Array  # float32[F]: what the bridge saw
+    can_plan: jax.Array  # bool: CallPlanner was applicable
 
 
 @struct.dataclass
@@ -107,23 +111,46 @@ def start_episode(env: NoveltyEnv, task: Any, horizon: jax.Array) -> Episode:
 
 def observe(env: NoveltyEnv, ep: Episode):
     """Abstract the state and close the episode at the goal or the horizon."""
-    atoms = env.abstract(ep.env_state)
     goal = env.goal_reached(ep.env_state)
     ep = ep.replace(success=ep.success | (~ep.done & goal), done=ep.done | goal | (ep.t >= ep.horizon))
     need_plan = ~ep.done & (ep.control == PLANNER) & ~ep.call.running
-    return ep, atoms, pack_atoms(atoms), need_plan
+    return ep, pack_atoms(env.abstract(ep.env_state)), need_plan
 
 
-def applicable_actions(env: NoveltyEnv, table: PlanTable, atoms: jax.Array, state: Any) -> jax.Array:
-    """bool[num_skills, num_slots]: ground skills whose operator preconditions hold (and initiable)."""
-    atoms_ext = jnp.concatenate([atoms, jnp.ones(1, bool)])  # id num_atoms = always true (padding)
-    op_ok = table.op_valid & jnp.all(atoms_ext[table.op_pre], axis=-1)
-    mask = jnp.zeros((env.num_skills, env.num_slots), bool).at[table.op_skill, table.op_slot].max(op_ok)
-    return mask & env.skill_initiable(state)
+def applicable_ops(env: NoveltyEnv, table: PlanTable, key: jax.Array, state: Any) -> jax.Array:
+    """bool[O]: ground operators whose preconditions hold and whose skill can start.
+
+    These are the bridge's ground actions (the authors' applicable ground NSRTs)."""
+    pre_hold = holds_all(table.op_pre, key[None, :])
+    return table.op_valid & pre_hold & env.skill_initiable(state, table.op_skill, table.op_slot)
 
 
-def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, key: jax.Array, plan: PlanLookup,
-                 table: PlanTable, rng: jax.Array) -> tuple[Episode, BridgeTurn]:
+def count_by_skill(env: NoveltyEnv, table: PlanTable, op_ok: jax.Array) -> jax.Array:
+    """int32[num_skills]: applicable ground operators of each skill."""
+    of_skill = table.op_skill[None, :] == jnp.arange(env.num_skills)[:, None]
+    return jnp.sum(of_skill & op_ok[None, :], axis=-1, dtype=jnp.int32)
+
+
+def hashed_choice(mask: jax.Array, bits: jax.Array) -> jax.Array:
+    """A uniformly random set entry of `mask` (0 if none), from one random uint32.
+
+    Each index gets a score from an integer hash of (bits, index) (the murmur3 finaliser) in the high
+    bits and its own index in the low bits, so one plain max picks the winner (no ties): on CPU much
+    cheaper than a uniform per entry, an argmax, or a cumulative-sum search."""
+    n = mask.shape[-1]
+    index_bits = max(1, (n - 1).bit_length())
+    index = jnp.arange(n, dtype=jnp.uint32)
+    x = bits ^ (index * jnp.uint32(0x9E3779B9))
+    x = (x ^ (x >> 16)) * jnp.uint32(0x85EBCA6B)
+    x = (x ^ (x >> 13)) * jnp.uint32(0xC2B2AE35)
+    x = x ^ (x >> 16)
+    score = ((x >> index_bits) << index_bits) | index
+    best = jnp.max(jnp.where(mask, score, jnp.uint32(0)))
+    return (best & jnp.uint32((1 << index_bits) - 1)).astype(jnp.int32)
+
+
+def planner_turn(env: NoveltyEnv, ep: Episode, key: jax.Array, plan: PlanLookup, table: PlanTable,
+                 u_param: jax.Array) -> tuple[Episode, jax.Array]:
     """Follow the plan; on stuck hand control to the bridge; say whether the bridge must choose."""
     state, live = ep.env_state, ~ep.done
     vec = env.state_vector(state)
@@ -136,7 +163,7 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, key: jax.Array,
 
     op = jnp.maximum(plan.op, 0)
     skill = table.op_skill[op]
-    planner_call = SkillCall(skill=skill, slot=table.op_slot[op], param=env.sample_params(rng)[skill],
+    planner_call = SkillCall(skill=skill, slot=table.op_slot[op], param=env.param_from_uniform(skill, u_param),
                              running=jnp.bool_(True), steps=jnp.int32(0))
     abandoned = ep.call.replace(running=ep.call.running & ~stuck)
     ep = ep.replace(
@@ -148,24 +175,34 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, key: jax.Array,
         table_misses=ep.table_misses + (plan.miss & needs_op),
         stuck_events=ep.stuck_events + stuck,
     )
-    slot_mask = applicable_actions(env, table, atoms, state)
-    can_plan = ~same_state(vec, ep.bridge_vec)
-    num_ground = jnp.concatenate([slot_mask.sum(-1), can_plan[None]]).astype(jnp.int32)
     decide = live & (ep.control == BRIDGE) & ~ep.call.running
+    return ep, decide
+
+
+def bridge_turn(env: NoveltyEnv, bridge: Bridge, params: Any, ep: Episode, table: PlanTable,
+                key: jax.Array, rng: jax.Array, choice_bits: jax.Array) -> Decision:
+    """The bridge observes, chooses a skill and parameter, and the choice is grounded uniformly at
+    random among the applicable ground operators of that skill (the Q-function does not see objects)."""
+    state = ep.env_state
+    vec = env.state_vector(state)
+    op_ok = applicable_ops(env, table, key, state)
+    can_plan = ~same_state(vec, ep.bridge_vec)
+    num_ground = jnp.concatenate([count_by_skill(env, table, op_ok), can_plan[None].astype(jnp.int32)])
     obs = BridgeObs(features=env.features(state, ep.stuck_state), num_ground=num_ground)
-    return ep, BridgeTurn(decide=decide, obs=obs, slot_mask=slot_mask)
+    choice = bridge(params, obs, rng)
+    skill = jnp.clip(choice.skill, 0, env.num_skills)
+    op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)
+    return Decision(skill=skill.astype(jnp.int32), slot=table.op_slot[op], param=choice.param,
+                    features=obs.features, can_plan=can_plan)
 
 
-def execute(env: NoveltyEnv, ep: Episode, turn: BridgeTurn, choice: BridgeAction, stuck: jax.Array,
-            rng: jax.Array) -> tuple[Episode, StepRecord]:
-    """Start the bridge's choice if it made one, then take one env step."""
+def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
+            stuck: jax.Array) -> tuple[Episode, StepRecord]:
+    """Start the bridge's decision if it made one, then take one env step."""
     state, live = ep.env_state, ~ep.done
-    call_planner = turn.decide & (choice.skill >= env.num_skills)
-    start_skill = turn.decide & ~call_planner
-    skill = jnp.clip(choice.skill, 0, env.num_skills - 1)
-    # The Q-function does not see which object a skill acts on: pick uniformly among its ground slots.
-    scores = jnp.where(turn.slot_mask[skill], jax.random.uniform(rng, (env.num_slots,)), -1.0)
-    bridge_call = SkillCall(skill=skill, slot=jnp.argmax(scores).astype(jnp.int32), param=choice.param,
+    call_planner = decide & (decision.skill >= env.num_skills)
+    start_skill = decide & ~call_planner
+    bridge_call = SkillCall(skill=decision.skill, slot=decision.slot, param=decision.param,
                             running=jnp.bool_(True), steps=jnp.int32(0))
     call = tree_where(start_skill, bridge_call, ep.call)
 
@@ -174,23 +211,38 @@ def execute(env: NoveltyEnv, ep: Episode, turn: BridgeTurn, choice: BridgeAction
     finished = env.skill_done(state, next_state, call)
     planner_acted = live & (ep.control == PLANNER)
     actor = jnp.where(call_planner, ACTOR_CALL_PLANNER, jnp.where(planner_acted, ACTOR_PLANNER, ACTOR_BRIDGE))
-    record = StepRecord(live=live, actor=actor, decided=turn.decide, stuck=stuck,
+    record = StepRecord(live=live, actor=actor, decided=decide, stuck=stuck,
                         skill=jnp.where(call_planner, env.num_skills, call.skill), slot=call.slot,
-                        param=call.param, features=turn.obs.features,
-                        can_plan=turn.obs.num_ground[-1] > 0, env_state=state)
+                        param=call.param, features=decision.features, can_plan=decision.can_plan,
+                        env_state=state)
     ep = ep.replace(
         env_state=next_state,
         t=ep.t + live,
         call=call.replace(running=live & ~call_planner & call.running & ~finished,
                           steps=call.steps + live),
         control=jnp.where(call_planner, PLANNER, ep.control),
-        expected=jnp.where(call_planner[None], jnp.zeros_like(ep.expected), ep.expected),
+        expected=jnp.where(call_planner, jnp.zeros_like(ep.expected), ep.expected),
         prev_vec=env.state_vector(state),
         planner_stepped=planner_acted,  # False after CallPlanner: the new plan starts fresh
         planner_calls=ep.planner_calls + call_planner,
-        bridge_decisions=ep.bridge_decisions + turn.decide,
+        bridge_decisions=ep.bridge_decisions + decide,
     )
     return ep, record
+
+
+def step_randomness(key: jax.Array, num_episodes: int, max_steps: int):
+    """All of a rollout's randomness, drawn up front in two batched calls (per-step draws of a few
+    numbers are dominated by PRNG call overhead on CPU): per step and episode, two uniforms (planner
+    parameter), random bits (grounding the bridge's choice) and a key for the bridge. Episode i's draws
+    depend only on (key, i)."""
+    k_uniform, k_bits, k_bridge = jax.random.split(key, 3)
+
+    def per_episode(draw, k):
+        return jnp.swapaxes(jax.vmap(draw)(jax.random.split(k, num_episodes)), 0, 1)
+
+    return (per_episode(lambda k: jax.random.uniform(k, (max_steps,)), k_uniform),
+            per_episode(lambda k: jax.random.bits(k, (max_steps,), jnp.uint32), k_bits),
+            per_episode(lambda k: jax.random.split(k, max_steps), k_bridge))
 
 
 @partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record"))
@@ -203,25 +255,28 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, tasks: Any, tab
     """
     num_episodes = horizons.shape[0]
     episodes = jax.vmap(partial(start_episode, env))(tasks, horizons)
-    episode_keys = jax.random.split(key, num_episodes)
-    no_choice = BridgeAction(skill=jnp.zeros(num_episodes, jnp.int32),
-                             param=jnp.zeros(num_episodes, jnp.float32))
+    no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
+                           param=jnp.zeros(num_episodes, jnp.float32),
+                           features=jnp.zeros((num_episodes, env.num_features), jnp.float32),
+                           can_plan=jnp.zeros(num_episodes, bool))
 
-    def step(episodes: Episode, t: jax.Array):
-        keys = jax.vmap(lambda k: jax.random.split(jax.random.fold_in(k, t), 3))(episode_keys)
-        episodes, atoms, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
+    def step(episodes: Episode, randomness):
+        param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]
+        episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
         plan = batched_plan_lookup(tables, packed, need_plan)
         stuck_before = episodes.stuck_events
-        episodes, turn = jax.vmap(partial(planner_turn, env))(episodes, atoms, packed, plan, tables,
-                                                              keys[:, 0])
-        choice = jax.lax.cond(jnp.any(turn.decide),
-                              lambda: jax.vmap(bridge)(bridge_params, turn.obs, keys[:, 1]),
-                              lambda: no_choice)
+        episodes, decide = jax.vmap(partial(planner_turn, env))(episodes, packed, plan, tables,
+                                                                param_uniforms)
+        decision = jax.lax.cond(  # the bridge only runs on steps where some episode must choose
+            jnp.any(decide),
+            lambda: jax.vmap(partial(bridge_turn, env, bridge))(bridge_params, episodes, tables, packed,
+                                                                 bridge_keys, choice_bits),
+            lambda: no_decision)
         stuck = episodes.stuck_events > stuck_before
-        episodes, rec = jax.vmap(partial(execute, env))(episodes, turn, choice, stuck, keys[:, 2])
+        episodes, rec = jax.vmap(partial(execute, env))(episodes, decide, decision, stuck)
         return episodes, (rec if record else None)
 
-    episodes, records = jax.lax.scan(step, episodes, jnp.arange(max_steps))
+    episodes, records = jax.lax.scan(step, episodes, step_randomness(key, num_episodes, max_steps))
     episodes, *_ = jax.vmap(partial(observe, env))(episodes)  # the goal test on the final state
     result = EpisodeResult(success=episodes.success, steps=episodes.t,
                            planner_calls=episodes.planner_calls, table_misses=episodes.table_misses,

@@ -59,7 +59,7 @@ class PlanTable:
     state_valid: jax.Array  # bool[S]
     next_op: jax.Array  # int32[S]: first operator of an optimal plan; -1 at a goal or dead end
     next_keys: jax.Array  # uint32[S, W]: the abstract state the model predicts after next_op
-    op_pre: jax.Array  # int32[O, P]: fluent precondition atom ids; index A = an always-true atom
+    op_pre: jax.Array  # uint32[O, W]: fluent preconditions, packed like states
     op_skill: jax.Array  # int32[O]
     op_slot: jax.Array  # int32[O]
     op_valid: jax.Array  # bool[O]
@@ -88,7 +88,6 @@ class CompiledTask:
     init_state: int
     table: PlanTable  # numpy leaves
     num_reachable: int
-    num_atoms: int  # the always-true atom id that pads precondition lists
 
     def plan(self) -> list[GroundOperator]:
         return [self.ground_ops[i] for i in self.planner.plan(self.init_state)]
@@ -114,10 +113,6 @@ def compile_task(env, spec, max_states: int | None = None) -> CompiledTask:
     planner.calls = 0
 
     words = num_words(env.num_atoms)
-    max_pre = max([len(o.pre) for o in ops] + [1])
-    op_pre = np.full((len(ops), max_pre), env.num_atoms, np.int32)
-    for i, o in enumerate(ops):
-        op_pre[i, : len(o.pre)] = sorted(env.atom_index(a) for a in o.pre)
     uid = next(_UIDS)
     _HOST_PLANNERS[uid] = planner
     table = PlanTable(
@@ -127,13 +122,13 @@ def compile_task(env, spec, max_states: int | None = None) -> CompiledTask:
         state_valid=np.ones(len(states), bool),
         next_op=np.array([policy[s].op for s in states], np.int32),
         next_keys=np.stack([bits_to_words(policy[s].next_state, words) for s in states]),
-        op_pre=op_pre,
+        op_pre=np.stack([bits_to_words(o.pre, words) for o in bit_ops]),
         op_skill=np.array([env.skill_index(o.skill) for o in ops], np.int32),
         op_slot=np.array([env.object_slot(o.slot_object) if o.slot_object else 0 for o in ops],
                          np.int32),
         op_valid=np.ones(len(ops), bool),
     )
-    return CompiledTask(uid, problem, ops, planner, init, table, len(policy), env.num_atoms)
+    return CompiledTask(uid, problem, ops, planner, init, table, len(policy))
 
 
 def _pad(x: np.ndarray, n: int, fill) -> np.ndarray:
@@ -146,16 +141,12 @@ def stack_tables(tasks: list[CompiledTask]) -> PlanTable:
     tables = [t.table for t in tasks]
     s = max(t.state_keys.shape[0] for t in tables)
     o = max(t.op_pre.shape[0] for t in tables)
-    p = max(t.op_pre.shape[1] for t in tables)
-    always_true = tasks[0].num_atoms
 
     def padded(t: PlanTable) -> PlanTable:
-        extra = np.full((t.op_pre.shape[0], p - t.op_pre.shape[1]), always_true, np.int32)
         return t.replace(
             state_keys=_pad(t.state_keys, s, 0), state_valid=_pad(t.state_valid, s, False),
             next_op=_pad(t.next_op, s, NO_OPERATOR), next_keys=_pad(t.next_keys, s, 0),
-            op_pre=_pad(np.concatenate([t.op_pre, extra], axis=1), o, always_true),
-            op_skill=_pad(t.op_skill, o, 0), op_slot=_pad(t.op_slot, o, 0),
+            op_pre=_pad(t.op_pre, o, 0), op_skill=_pad(t.op_skill, o, 0), op_slot=_pad(t.op_slot, o, 0),
             op_valid=_pad(t.op_valid, o, False))
 
     return jax.tree.map(lambda *xs: jnp.asarray(np.stack(xs)), *[padded(t) for t in tables])
@@ -164,8 +155,9 @@ def stack_tables(tasks: list[CompiledTask]) -> PlanTable:
 def table_lookup(table: PlanTable, key: jax.Array) -> PlanLookup:
     """In-graph lookup of one packed abstract state (one task)."""
     match = jnp.all(table.state_keys == key, axis=-1) & table.state_valid
-    row = jnp.argmax(match)
-    return PlanLookup(found=jnp.any(match), op=table.next_op[row], next_key=table.next_keys[row],
+    # At most one row matches: a plain max finds it (cheaper than argmax on CPU).
+    row = jnp.max(jnp.where(match, jnp.arange(match.shape[0]), -1))
+    return PlanLookup(found=row >= 0, op=table.next_op[row], next_key=table.next_keys[row],
                       miss=jnp.zeros((), bool))
 
 
