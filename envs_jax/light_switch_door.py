@@ -35,6 +35,9 @@ class LightSwitchDoorTask:
     num_cells: int
     door_cells: tuple[int, ...]
 
+    def describe(self) -> str:
+        return f"{self.num_cells} cells, {len(self.door_cells)} doors"
+
     @property
     def shortest_solution(self) -> int:
         """h: (N-1) moves + 1 light + 4 per door (blocked move, MoveKey, TurnKey, CallPlanner)."""

@@ -43,7 +43,7 @@ def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizon
                      horizons=jnp.asarray(horizons, jnp.int32))
 
 
-def test_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10) -> TaskBatch:
+def evaluation_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10) -> TaskBatch:
     """Every seed's test tasks in one batch (seed-major order)."""
     specs, owners = [], []
     for seed in seeds:

@@ -1,0 +1,60 @@
+"""Evaluate a bridge on every seed's test tasks and summarise per seed."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import jax
+import numpy as np
+
+from jaxbridge.bridges import Bridge
+from jaxbridge.meta_policy import EpisodeResult, rollout
+from jaxbridge.tasks import TaskBatch
+
+
+@dataclass
+class SeedSummary:
+    seed: int
+    tasks: int
+    solve_rate: float
+    mean_steps: float
+    planner_calls: float  # per task
+    table_misses: int
+    bridge_decisions: float  # per task
+    task_size: str  # e.g. "11 cells, 3 doors"
+
+
+def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0) -> EpisodeResult:
+    """One rollout of every task in the batch (bridge_params: None or batched over tasks)."""
+    result, _ = rollout(batch.env, bridge, bridge_params, batch.tasks, batch.tables, batch.horizons,
+                        jax.random.key(seed), batch.max_steps)
+    return jax.tree.map(np.asarray, result)
+
+
+def summarise(batch: TaskBatch, result: EpisodeResult) -> list[SeedSummary]:
+    rows = []
+    for seed in dict.fromkeys(batch.seeds.tolist()):
+        mine = batch.seeds == seed
+        rows.append(SeedSummary(
+            seed=int(seed), tasks=int(mine.sum()), solve_rate=float(result.success[mine].mean()),
+            mean_steps=float(result.steps[mine].mean()),
+            planner_calls=float(result.planner_calls[mine].mean()),
+            table_misses=int(result.table_misses[mine].sum()),
+            bridge_decisions=float(result.bridge_decisions[mine].mean()),
+            task_size=batch.specs[int(np.argmax(mine))].describe()))
+    return rows
+
+
+def format_table(rows: list[SeedSummary]) -> str:
+    header = (f"{'seed':>4}  {'task size':<20} {'tasks':>5}  {'solve rate':>10}  {'mean steps':>10}  "
+              f"{'planner calls/task':>18}  {'bridge decisions/task':>21}  {'table misses':>12}")
+    lines = [header, "-" * len(header)]
+    for r in rows:
+        lines.append(f"{r.seed:>4}  {r.task_size:<20} {r.tasks:>5}  {r.solve_rate:>10.2f}  {r.mean_steps:>10.1f}  "
+                     f"{r.planner_calls:>18.1f}  {r.bridge_decisions:>21.1f}  {r.table_misses:>12d}")
+    n = sum(r.tasks for r in rows)
+    mean = lambda f: sum(f(r) * r.tasks for r in rows) / n
+    lines.append("-" * len(header))
+    lines.append(f"{'all':>4}  {'':<20} {n:>5}  {mean(lambda r: r.solve_rate):>10.2f}  "
+                 f"{mean(lambda r: r.mean_steps):>10.1f}  {mean(lambda r: r.planner_calls):>18.1f}  "
+                 f"{mean(lambda r: r.bridge_decisions):>21.1f}  {sum(r.table_misses for r in rows):>12d}")
+    return "\n".join(lines)

@@ -1,0 +1,142 @@
+"""Light Switch Door: every dynamics rule of envs.md §2.3, the predicates, task generation, jit/vmap."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from envs_jax import light_switch_door as lsd
+from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchDoorTask
+
+ENV = LightSwitchDoor(max_cells=12, max_doors=3)
+TASK = LightSwitchDoorTask(num_cells=10, door_cells=(2, 5))  # robot starts in cell 0
+
+
+def fresh(x=0.5, move=(0.0, 0.0), turn=(0.0, 0.0)):
+    state = ENV.reset(ENV.task_arrays(TASK))
+    return state.replace(robot_x=jnp.float32(x), move_key=state.move_key.at[:2].set(jnp.array(move)),
+                         turn_key=state.turn_key.at[:2].set(jnp.array(turn)))
+
+
+def act(state, dx=0.0, dlight=0.0, dmove=0.0, dturn=0.0):
+    return jax.jit(ENV.step)(state, jnp.array([dx, dlight, dmove, dturn], jnp.float32))
+
+
+def test_closed_door_blocks_only_leaving_its_cell_to_the_right():
+    assert float(act(fresh(x=2.5), dx=1.0).robot_x) == 2.5  # blocked in the door cell
+    assert float(act(fresh(x=2.5), dx=-1.0).robot_x) == 1.5  # left is always allowed
+    assert float(act(fresh(x=1.5), dx=1.0).robot_x) == 2.5  # entering a door cell is allowed
+    assert float(act(fresh(x=3.5), dx=1.0).robot_x) == 4.5  # other cells are free
+    open_first = fresh(x=2.5, move=(0.5, 0.0), turn=(0.75, 0.0))
+    assert float(act(open_first, dx=1.0).robot_x) == 3.5  # an open door lets the robot through
+
+
+def test_opening_step_does_not_also_move():
+    # The move test reads the pre-step keys: the step that opens the door leaves the robot in place.
+    s = act(fresh(x=2.5, move=(0.5, 0.0), turn=(0.0, 0.0)), dx=1.0, dturn=0.75)
+    assert float(s.robot_x) == 2.5 and bool(ENV.door_open(s)[0])
+
+
+def test_keys_accumulate_and_clip_only_in_the_door_cell():
+    s = act(act(fresh(x=2.5), dmove=0.3), dmove=0.3)
+    assert float(s.move_key[0]) == pytest.approx(0.6)
+    assert float(act(fresh(x=2.5, move=(0.8, 0)), dmove=0.7).move_key[0]) == 1.0
+    assert float(act(fresh(x=2.5, turn=(0.2, 0)), dturn=-0.9).turn_key[0]) == 0.0
+    elsewhere = act(fresh(x=3.5), dmove=0.5, dturn=0.5)
+    assert np.all(np.asarray(elsewhere.move_key) == 0) and np.all(np.asarray(elsewhere.turn_key) == 0)
+    assert float(act(fresh(x=5.5), dmove=0.2).move_key[1]) == pytest.approx(0.2)  # the second door
+
+
+@pytest.mark.parametrize("move,turn,is_open", [
+    (0.4, 0.65, True), (0.6, 0.85, True), (0.5, 0.75, True),  # inclusive bounds
+    (0.39, 0.75, False), (0.61, 0.75, False), (0.5, 0.64, False), (0.5, 0.86, False), (0.0, 0.0, False)])
+def test_door_opens_within_inclusive_tolerance(move, turn, is_open):
+    assert bool(ENV.door_open(fresh(move=(move, 0), turn=(turn, 0)))[0]) == is_open
+
+
+def test_open_doors_stay_open():
+    s = act(fresh(x=2.5, move=(0.5, 0), turn=(0.75, 0)), dmove=0.9, dturn=-0.9)
+    assert float(s.move_key[0]) == 0.5 and float(s.turn_key[0]) == 0.75 and bool(ENV.door_open(s)[0])
+
+
+@pytest.mark.parametrize("dlight,on", [(0.75, True), (0.74, False), (0.76, False), (1.0, False), (-0.75, False)])
+def test_light_switches_on_only_at_exactly_075_in_its_cell(dlight, on):
+    assert bool(ENV.goal_reached(act(fresh(x=9.5), dlight=dlight))) == on
+    assert not bool(ENV.goal_reached(act(fresh(x=8.5), dlight=0.75)))  # not in the light's cell
+
+
+def test_light_cannot_be_switched_off():
+    on = act(fresh(x=9.5), dlight=0.75)
+    assert bool(ENV.goal_reached(act(on, dlight=0.75))) and bool(ENV.goal_reached(act(on, dlight=-0.75)))
+
+
+def test_moves_clip_to_the_row():
+    assert float(act(fresh(x=0.5), dx=-1.0).robot_x) == 0.0
+
+
+def test_predicates():
+    atoms = np.asarray(ENV.abstract(fresh(x=3.5)))
+    assert atoms.shape == (ENV.num_atoms,)
+    assert atoms[:12].tolist() == [i == 3 for i in range(12)]  # RobotInCell; padded cells never hold
+    assert atoms[ENV.atom_index(("LightOff", "light"))] and not atoms[ENV.atom_index(("LightOn", "light"))]
+    lit = np.asarray(ENV.abstract(act(fresh(x=9.5), dlight=0.75)))
+    assert lit[ENV.atom_index(("LightOn", "light"))] and not lit[ENV.atom_index(("LightOff", "light"))]
+    assert not np.asarray(ENV.abstract(fresh(x=10.5)))[:12].any()  # beyond the row: no cell
+
+
+def test_features_see_the_door_in_the_robots_cell_only():
+    s = fresh(x=2.5, move=(0.3, 0.0), turn=(0.1, 0.0))
+    assert np.allclose(ENV.features(s, s), [1.0, 0.3, 0.5, 0.1, 0.75])
+    assert np.allclose(ENV.features(fresh(x=3.5), s), 0.0)
+
+
+def test_skill_actions_follow_their_spec():
+    from envs_jax.base import SkillCall
+    s = fresh(x=2.5)
+
+    def action(name, slot, param):
+        return np.asarray(ENV.skill_action(s, SkillCall(jnp.int32(ENV.skill_index(name)), jnp.int32(slot),
+                                                        jnp.float32(param), jnp.bool_(True), jnp.int32(0))))
+    assert action("MoveRobot", 3, 0.0).tolist() == [1.0, 0, 0, 0]
+    assert action("MoveRobot", 1, 0.0).tolist() == [-1.0, 0, 0, 0]
+    assert action("TurnOnLight", 2, 0.75).tolist() == [0, 0.75, 0, 0]
+    assert np.allclose(action("MoveKey", 2, 0.4), [0, 0, 0.4, 0])
+    assert np.allclose(action("TurnKey", 2, -0.2), [0, 0, 0, -0.2])
+
+
+@pytest.mark.parametrize("seed", range(50))
+def test_task_generation_ranges(seed):
+    train = lsd.train_task(seed)
+    assert train.num_cells == 5 and len(train.door_cells) == 1 and train.door_cells[0] in (0, 1, 2)
+    tests = lsd.test_tasks(seed)
+    assert len(tests) == 10
+    assert len({(t.num_cells, len(t.door_cells)) for t in tests}) == 1  # N and K drawn once per seed
+    for t in tests:
+        assert 10 <= t.num_cells <= 20 and 2 <= len(t.door_cells) <= 4
+        assert len(set(t.door_cells)) == len(t.door_cells) and all(0 <= c <= 8 for c in t.door_cells)
+        assert t.horizon == max(30, (t.num_cells - 1) + 1 + 4 * len(t.door_cells) + 5)
+
+
+def test_test_sizes_replay_the_authors_rng():
+    # envs.md §2.2 lists (N, K, h) per seed, computed by replaying the authors' test RNG.
+    expected = {0: (11, 3, 23), 1: (14, 4, 30), 2: (20, 3, 32), 3: (13, 4, 29), 4: (14, 4, 30),
+                5: (13, 2, 21), 6: (13, 2, 21), 7: (11, 4, 27)}
+    for seed, (n, k, h) in expected.items():
+        t = lsd.test_tasks(seed)[0]
+        assert (t.num_cells, len(t.door_cells), t.shortest_solution) == (n, k, h)
+
+
+def test_reset_and_step_jit_and_vmap_over_seeds_and_tasks():
+    specs = [t for seed in range(8) for t in lsd.test_tasks(seed)]
+    env = LightSwitchDoor.for_tasks(specs)
+    tasks = env.stack_tasks(specs)
+    states = jax.jit(jax.vmap(env.reset))(tasks)
+    assert states.robot_x.shape == (80,) and states.move_key.shape == (80, env.max_doors)
+    actions = jnp.tile(jnp.array([1.0, 0.0, 0.2, 0.0], jnp.float32), (80, 1))
+    batched = jax.jit(jax.vmap(env.step))(states, actions)
+    for i in (0, 37, 79):
+        one = env.step(jax.tree.map(lambda x: x[i], states), actions[i])
+        assert float(one.robot_x) == float(batched.robot_x[i])
+        assert np.array_equal(np.asarray(one.move_key), np.asarray(batched.move_key[i]))
+    # Each task's first door decides whether the robot could leave cell 0.
+    blocked = np.array([0 in s.door_cells for s in specs])
+    assert np.array_equal(np.asarray(batched.robot_x) == 0.5, blocked)

@@ -1,0 +1,126 @@
+"""The planner/bridge meta-policy (Algorithm 1): stuck detection, hand-over, CallPlanner, batching."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from envs_jax import light_switch_door as lsd
+from envs_jax.light_switch_door import LightSwitchDoor
+from jaxbridge.bridges import make_bridge
+from jaxbridge.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, hashed_choice, rollout
+from jaxbridge.tasks import make_batch, evaluation_batch
+from planner.tables import compile_task, stack_tables
+
+SEEDS = list(range(8))
+
+
+@pytest.fixture(scope="module")
+def batch():
+    return evaluation_batch(LightSwitchDoor, SEEDS)
+
+
+def run(batch, bridge_name, seed=0, record=False, tables=None):
+    bridge = make_bridge(bridge_name, batch.env)
+    result, records = rollout(batch.env, bridge, None, batch.tasks, batch.tables if tables is None else tables,
+                              batch.horizons, jax.random.key(seed), batch.max_steps, record=record)
+    return jax.tree.map(np.asarray, result), (None if records is None else jax.tree.map(np.asarray, records))
+
+
+def test_oracle_bridge_solves_every_test_task_of_seeds_0_to_7_in_the_fewest_steps(batch):
+    result, _ = run(batch, "oracle")
+    assert result.success.all()
+    shortest = np.array([s.shortest_solution for s in batch.specs])
+    assert np.array_equal(result.steps, shortest)  # blocked move + MoveKey + TurnKey + CallPlanner per door
+    assert (result.steps <= np.asarray(batch.horizons)).all()
+    doors = np.array([len(s.door_cells) for s in batch.specs])
+    assert np.array_equal(result.planner_calls, 1 + doors) and np.array_equal(result.stuck_events, doors)
+    assert result.table_misses.sum() == 0
+
+
+def test_pure_planning_solves_none(batch):
+    result, _ = run(batch, "none")
+    assert not result.success.any()
+    assert np.array_equal(result.steps, np.asarray(batch.horizons))
+    assert (result.stuck_events >= 1).all() and (result.planner_calls > 1).all()  # it keeps re-planning
+
+
+def test_random_bridge_only_takes_applicable_actions(batch):
+    result, rec = run(batch, "random", seed=3, record=True)
+    assert 0.0 <= result.success.mean() <= 1.0
+    decided = rec.decided & rec.live
+    call_planner = decided & (rec.skill == batch.env.num_skills)
+    assert call_planner.any() and rec.can_plan[call_planner].all()  # CallPlanner only once applicable
+    stuck = rec.stuck & rec.live
+    assert not rec.can_plan[stuck].any()  # ... never at the state where the bridge takes over
+    # Every skill the bridge ran had a ground instance at the robot's position: MoveRobot goes to an
+    # adjacent cell, MoveKey/TurnKey act on the robot's own cell.
+    robot_cell = np.floor(rec.env_state.robot_x).astype(int)
+    started = decided & ~call_planner
+    move = started & (rec.skill == batch.env.skill_index("MoveRobot"))
+    assert (np.abs(rec.slot[move] - robot_cell[move]) == 1).all()
+    keys = started & np.isin(rec.skill, [batch.env.skill_index("MoveKey"), batch.env.skill_index("TurnKey")])
+    assert (rec.slot[keys] == robot_cell[keys]).all()
+
+
+def test_stuck_hand_over_and_call_planner_step_by_step():
+    spec = lsd.LightSwitchDoorTask(5, (2,))
+    b = make_batch(LightSwitchDoor, [spec], [0])
+    result, rec = run(b, "oracle", record=True)
+    env, x = b.env, rec.env_state.robot_x[:, 0]
+    actors = rec.actor[:, 0][: result.steps[0]].tolist()
+    # 0,1: planner moves to cell 2; 2: its move out of the door cell is blocked; 3: the repeated state
+    # is detected (no step spent on it) and the bridge turns both keys; 5: CallPlanner; then the plan.
+    assert actors == [ACTOR_PLANNER] * 3 + [ACTOR_BRIDGE] * 2 + [ACTOR_CALL_PLANNER] + [ACTOR_PLANNER] * 3
+    assert x[:4].tolist() == [0.5, 1.5, 2.5, 2.5] and rec.stuck[:, 0].tolist().index(True) == 3
+    assert rec.skill[3:5, 0].tolist() == [env.skill_index("MoveKey"), env.skill_index("TurnKey")]
+    assert not rec.can_plan[3, 0] and rec.can_plan[5, 0]
+    before, after = rec.env_state.move_key[5, 0], rec.env_state.move_key[6, 0]
+    assert x[5] == x[6] and np.array_equal(before, after)  # CallPlanner's step is a no-op
+    assert result.success[0] and result.steps[0] == spec.shortest_solution == 9
+
+
+def test_expected_atoms_that_fail_make_the_planner_stuck():
+    # Corrupt the model's predictions: after its first move the planner expects an impossible state.
+    spec = lsd.LightSwitchDoorTask(6, (4,))
+    b = make_batch(LightSwitchDoor, [spec], [0])
+    broken = b.tables.replace(next_keys=jnp.full_like(b.tables.next_keys, 0xFFFFFFFF))
+    _, rec = run(b, "none", record=True, tables=broken)
+    first_stuck = rec.stuck[:, 0].tolist().index(True)
+    assert first_stuck == 1 and rec.env_state.robot_x[1, 0] == 1.5  # the move worked, the check did not
+
+
+def test_the_host_planner_covers_states_missing_from_the_table(batch):
+    truncated = [compile_task(batch.env, spec, max_states=3) for spec in batch.specs]
+    result, _ = run(batch, "oracle", tables=stack_tables(truncated))
+    full, _ = run(batch, "oracle")
+    assert result.success.all() and np.array_equal(result.steps, full.steps)
+    assert (result.table_misses > 0).all()
+    assert sum(t.planner.calls for t in truncated) == result.table_misses.sum()
+
+
+def test_an_episode_runs_the_same_alone_and_in_a_batch(batch):
+    full, full_rec = run(batch, "oracle", record=True)
+    for i in (0, 41, 79):
+        alone = make_batch(LightSwitchDoor, [batch.specs[i]], [0], env=batch.env)
+        one, one_rec = run(alone, "oracle", record=True)
+        assert one.steps[0] == full.steps[i] and one.planner_calls[0] == full.planner_calls[i]
+        steps = one.steps[0]
+        assert np.array_equal(one_rec.actor[:steps, 0], full_rec.actor[:steps, i])
+
+
+def test_rollouts_are_deterministic_per_key(batch):
+    a, _ = run(batch, "random", seed=5)
+    b, _ = run(batch, "random", seed=5)
+    c, _ = run(batch, "random", seed=6)
+    assert all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)))
+    assert not np.array_equal(a.bridge_decisions, c.bridge_decisions)
+
+
+def test_hashed_choice_is_uniform_over_set_entries():
+    mask = jnp.zeros(40, bool).at[jnp.array([3, 7, 8, 20, 39])].set(True)
+    bits = jax.random.bits(jax.random.key(0), (20000,), jnp.uint32)
+    picks = np.asarray(jax.vmap(lambda b: hashed_choice(mask, b))(bits))
+    values, counts = np.unique(picks, return_counts=True)
+    assert values.tolist() == [3, 7, 8, 20, 39]
+    assert np.all(np.abs(counts / len(picks) - 0.2) < 0.02)
+    assert int(hashed_choice(jnp.zeros(40, bool), bits[0])) == 0
