@@ -25,7 +25,7 @@ def measure(batch, repeats: int) -> dict:
 
     def once(i):
         result, _ = rollout(batch.env, bridge, None, batch.tasks, batch.tables, batch.horizons,
-                            jax.random.key(i), batch.max_steps)
+                            jax.random.split(jax.random.key(i), batch.size), batch.max_steps)
         return jax.block_until_ready(result)
 
     start = time.perf_counter()

@@ -26,7 +26,7 @@ class SeedSummary:
 def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0) -> EpisodeResult:
     """One rollout of every task in the batch (bridge_params: None or batched over tasks)."""
     result, _ = rollout(batch.env, bridge, bridge_params, batch.tasks, batch.tables, batch.horizons,
-                        jax.random.key(seed), batch.max_steps)
+                        jax.random.split(jax.random.key(seed), batch.size), batch.max_steps)
     return jax.tree.map(np.asarray, result)
 
 

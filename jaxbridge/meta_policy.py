@@ -63,7 +63,7 @@ class Decision:
     slot: jax.Array  # int32
     param: jax.Array  # float32
     features: jax.Array  # float32[F]: what the bridge saw
-    can_plan: jax.Array  # bool: CallPlanner was applicable
+    num_ground: jax.Array  # int32[num_skills + 1]: what it could choose from (CallPlanner last)
 
 
 @struct.dataclass
@@ -77,9 +77,14 @@ class StepRecord:
     skill: jax.Array  # int32: skill executed (num_skills for CallPlanner)
     slot: jax.Array  # int32
     param: jax.Array  # float32
-    features: jax.Array  # float32[F]: the bridge's observation at this step
-    can_plan: jax.Array  # bool: CallPlanner was applicable
+    features: jax.Array  # float32[F]: the bridge's observation (at decisions; zeros otherwise)
+    num_ground: jax.Array  # int32[num_skills + 1]: its applicable actions (at decisions)
     env_state: Any  # state before the step
+
+    @property
+    def can_plan(self) -> jax.Array:
+        """CallPlanner was applicable (at decisions)."""
+        return self.num_ground[..., -1] > 0
 
 
 @struct.dataclass
@@ -193,7 +198,7 @@ def bridge_turn(env: NoveltyEnv, bridge: Bridge, params: Any, ep: Episode, table
     skill = jnp.clip(choice.skill, 0, env.num_skills)
     op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)
     return Decision(skill=skill.astype(jnp.int32), slot=table.op_slot[op], param=choice.param,
-                    features=obs.features, can_plan=can_plan)
+                    features=obs.features, num_ground=num_ground)
 
 
 def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
@@ -213,7 +218,7 @@ def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
     actor = jnp.where(call_planner, ACTOR_CALL_PLANNER, jnp.where(planner_acted, ACTOR_PLANNER, ACTOR_BRIDGE))
     record = StepRecord(live=live, actor=actor, decided=decide, stuck=stuck,
                         skill=jnp.where(call_planner, env.num_skills, call.skill), slot=call.slot,
-                        param=call.param, features=decision.features, can_plan=decision.can_plan,
+                        param=call.param, features=decision.features, num_ground=decision.num_ground,
                         env_state=state)
     ep = ep.replace(
         env_state=next_state,
@@ -230,27 +235,26 @@ def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
     return ep, record
 
 
-def step_randomness(key: jax.Array, num_episodes: int, max_steps: int):
+def step_randomness(keys: jax.Array, max_steps: int):
     """All of a rollout's randomness, drawn up front in two batched calls (per-step draws of a few
     numbers are dominated by PRNG call overhead on CPU): per step and episode, two uniforms (planner
-    parameter), random bits (grounding the bridge's choice) and a key for the bridge. Episode i's draws
-    depend only on (key, i)."""
-    k_uniform, k_bits, k_bridge = jax.random.split(key, 3)
+    parameter), random bits (grounding the bridge's choice) and a key for the bridge. An episode's draws
+    depend only on its own key, whatever else is in the batch."""
+    def per_episode(key):
+        k_uniform, k_bits, k_bridge = jax.random.split(key, 3)
+        return (jax.random.uniform(k_uniform, (max_steps,)),
+                jax.random.bits(k_bits, (max_steps,), jnp.uint32), jax.random.split(k_bridge, max_steps))
 
-    def per_episode(draw, k):
-        return jnp.swapaxes(jax.vmap(draw)(jax.random.split(k, num_episodes)), 0, 1)
-
-    return (per_episode(lambda k: jax.random.uniform(k, (max_steps,)), k_uniform),
-            per_episode(lambda k: jax.random.bits(k, (max_steps,), jnp.uint32), k_bits),
-            per_episode(lambda k: jax.random.split(k, max_steps), k_bridge))
+    return jax.tree.map(lambda x: jnp.swapaxes(x, 0, 1), jax.vmap(per_episode)(keys))
 
 
 @partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record"))
 def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, tasks: Any, tables: PlanTable,
-            horizons: jax.Array, key: jax.Array, max_steps: int, record: bool = False):
+            horizons: jax.Array, keys: jax.Array, max_steps: int, record: bool = False):
     """Run the meta-policy on a batch of B episodes for at most `max_steps` env steps.
 
-    tasks, tables, horizons and bridge_params (None, or a pytree) carry a leading batch axis B.
+    tasks, tables, horizons, keys (one per episode) and bridge_params (None, or a pytree) carry a
+    leading batch axis B.
     Returns EpisodeResult[B] and, with `record`, StepRecord[max_steps, B].
     """
     num_episodes = horizons.shape[0]
@@ -258,7 +262,7 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, tasks: Any, tab
     no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
                            param=jnp.zeros(num_episodes, jnp.float32),
                            features=jnp.zeros((num_episodes, env.num_features), jnp.float32),
-                           can_plan=jnp.zeros(num_episodes, bool))
+                           num_ground=jnp.zeros((num_episodes, env.num_skills + 1), jnp.int32))
 
     def step(episodes: Episode, randomness):
         param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]
@@ -276,7 +280,7 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, tasks: Any, tab
         episodes, rec = jax.vmap(partial(execute, env))(episodes, decide, decision, stuck)
         return episodes, (rec if record else None)
 
-    episodes, records = jax.lax.scan(step, episodes, step_randomness(key, num_episodes, max_steps))
+    episodes, records = jax.lax.scan(step, episodes, step_randomness(keys, max_steps))
     episodes, *_ = jax.vmap(partial(observe, env))(episodes)  # the goal test on the final state
     result = EpisodeResult(success=episodes.success, steps=episodes.t,
                            planner_calls=episodes.planner_calls, table_misses=episodes.table_misses,

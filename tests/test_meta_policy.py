@@ -22,7 +22,8 @@ def batch():
 def run(batch, bridge_name, seed=0, record=False, tables=None):
     bridge = make_bridge(bridge_name, batch.env)
     result, records = rollout(batch.env, bridge, None, batch.tasks, batch.tables if tables is None else tables,
-                              batch.horizons, jax.random.key(seed), batch.max_steps, record=record)
+                              batch.horizons, jax.random.split(jax.random.key(seed), batch.size), batch.max_steps,
+                              record=record)
     return jax.tree.map(np.asarray, result), (None if records is None else jax.tree.map(np.asarray, records))
 
 

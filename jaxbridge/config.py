@@ -1,0 +1,78 @@
+"""Hyperparameters of a training run; defaults are the paper's (reference/method.md §7)."""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+CONFIG_VERSION = 1
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    env: str = "light_switch_door"
+    """Environment name."""
+    num_seeds: int = 8
+    """Independent seeds, trained together in one vectorised computation."""
+    first_seed: int = 0
+    """Seeds are first_seed .. first_seed + num_seeds - 1; each draws its own train and test tasks."""
+    cycles: int = 100
+    """Online learning cycles (the paper: 100)."""
+    episodes_per_cycle: int = 5
+    """Training episodes per cycle on the training task (the paper: 5)."""
+    train_steps: int = 100
+    """Env steps per training episode at most (the paper: 100); it also ends at the goal."""
+    num_test_tasks: int = 10
+    """Test tasks per seed, evaluated greedily after every cycle (the paper: 10)."""
+    updates_per_cycle: int = 100
+    """Double-DQN minibatch updates after each cycle's episodes (see docs/DESIGN.md for the choice)."""
+    batch_size: int = 64
+    """Minibatch size (the paper: 64)."""
+    learning_rate: float = 1e-3
+    """Adam step size (the paper: 1e-3)."""
+    gamma: float = 0.8
+    """Discount per bridge decision (the paper: 0.8)."""
+    grad_clip: float = 5.0
+    """Global gradient-norm clip (the paper: 5)."""
+    polyak_tau: float = 0.0025
+    """Target-network soft update per minibatch update (the paper: 0.0025)."""
+    hidden_sizes: tuple[int, ...] = (32, 32)
+    """Q-network hidden layers (the paper: [32, 32])."""
+    n_sample: int = 100
+    """Parameter samples per skill in the greedy argmax (the paper: 100 for Light Switch Door)."""
+    n_target_sample: int = 10
+    """Parameter samples per skill when the online net picks the next action of a TD target (the
+    authors: 1, which rarely finds a key's +-0.1 window and so undervalues the states before it)."""
+    epsilon_start: float = 1.0
+    """Initial exploration rate."""
+    epsilon_end: float = 0.05
+    """Final exploration rate."""
+    epsilon_decay: float = 3.8e-5
+    """Linear decrease of epsilon per training bridge decision (the paper: 3.8e-5)."""
+    buffer_capacity: int = 32768
+    """Replay transitions kept per seed (FIFO); the paper's runs stored about 10k."""
+    call_planner_bonus: float = 0.0
+    """Extra reward when CallPlanner's transition reaches the goal (the authors' code: 0.5; off by default)."""
+    checkpoint_every: int = 10
+    """Save the learner state every this many cycles (and after the last one)."""
+
+    def to_dict(self) -> dict:
+        return {**dataclasses.asdict(self), "hidden_sizes": list(self.hidden_sizes),
+                "config_version": CONFIG_VERSION}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "TrainConfig":
+        data = dict(data)
+        version = data.pop("config_version", None)
+        if version != CONFIG_VERSION:
+            raise ValueError(f"config version {version} is not supported (this release reads {CONFIG_VERSION})")
+        fields = {f.name for f in dataclasses.fields(cls)}
+        unknown = set(data) - fields
+        if unknown:
+            raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")
+        if "hidden_sizes" in data:
+            data["hidden_sizes"] = tuple(data["hidden_sizes"])
+        return cls(**data)
+
+    @property
+    def seeds(self) -> list[int]:
+        return list(range(self.first_seed, self.first_seed + self.num_seeds))

@@ -1,0 +1,124 @@
+"""Double DQN for the bridge policy: learner state, epsilon schedule, targets, minibatch updates."""
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import optax
+from flax import struct
+
+from envs_jax.base import NoveltyEnv
+from jaxbridge.config import TrainConfig
+from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
+from jaxbridge.replay import ReplayBuffer, init_buffer
+from jaxbridge.transitions import Transition
+
+
+@struct.dataclass
+class Learner:
+    """Everything one seed's learning needs to continue exactly where it stopped."""
+
+    params: Any
+    target_params: Any
+    opt_state: Any
+    buffer: ReplayBuffer
+    key: jax.Array
+    decisions: jax.Array  # int32: training bridge decisions so far (drives epsilon)
+    updates: jax.Array  # int32: minibatch updates so far
+
+
+def make_optimizer(config: TrainConfig) -> optax.GradientTransformation:
+    return optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(config.learning_rate))
+
+
+def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:
+    """Linear annealing per training bridge decision, floored at epsilon_end."""
+    return jnp.maximum(config.epsilon_end, config.epsilon_start - config.epsilon_decay * decisions)
+
+
+def empty_transition(env: NoveltyEnv) -> Transition:
+    f = jnp.zeros(env.num_features, jnp.float32)
+    return Transition(features=f, skill=jnp.int32(0), param=jnp.float32(0), reward=jnp.float32(0),
+                      done=jnp.bool_(True), next_features=f,
+                      next_num_ground=jnp.zeros(env.num_skills + 1, jnp.int32))
+
+
+def init_learner(env: NoveltyEnv, config: TrainConfig, key: jax.Array) -> Learner:
+    k_init, k_run = jax.random.split(key)
+    net = QNetwork(config.hidden_sizes)
+    params = net.init(k_init, jnp.zeros((1, input_size(env)), jnp.float32))
+    return Learner(params=params, target_params=jax.tree.map(jnp.copy, params), opt_state=make_optimizer(config).init(params),
+                   buffer=init_buffer(empty_transition(env), config.buffer_capacity), key=k_run,
+                   decisions=jnp.int32(0), updates=jnp.int32(0))
+
+
+def td_targets(env: NoveltyEnv, config: TrainConfig, params: Any, target_params: Any, batch: Transition,
+               key: jax.Array) -> jax.Array:
+    """Double DQN: the online net picks a* among the next state's applicable actions (n_target_sample
+    parameter samples per skill), the target net values it; no bootstrapping past `done`."""
+    net = QNetwork(config.hidden_sizes)
+    skills = candidate_skills(env, config.n_target_sample)
+    keys = jax.random.split(key, batch.reward.shape[0])
+    best, _ = jax.vmap(lambda f, g, k: best_candidate(env, net, params, f, g, skills, k))(
+        batch.next_features, batch.next_num_ground, keys)
+    next_q = net.apply(target_params, encode(env, batch.next_features, best.skill, best.param))
+    return batch.reward + config.gamma * jnp.where(batch.done, 0.0, next_q)
+
+
+RELABEL_CHUNK = 1024
+
+
+def relabel(env: NoveltyEnv, config: TrainConfig, learner: Learner, key: jax.Array) -> jax.Array:
+    """float32[capacity]: TD targets of every stored transition, recomputed once per cycle with the
+    current nets (as the authors' code does), in chunks up to the buffer's fill level."""
+    buffer = learner.buffer
+    chunks = -(-buffer.capacity // RELABEL_CHUNK)
+    data = jax.tree.map(lambda x: jnp.pad(x, [(0, chunks * RELABEL_CHUNK - x.shape[0])] + [(0, 0)] * (x.ndim - 1))
+                        .reshape((chunks, RELABEL_CHUNK) + x.shape[1:]), buffer.data)
+
+    def chunk_targets(i, targets):
+        batch = jax.tree.map(lambda x: x[i], data)
+        y = td_targets(env, config, learner.params, learner.target_params, batch, jax.random.fold_in(key, i))
+        return targets.at[i].set(y)
+
+    filled = (buffer.size + RELABEL_CHUNK - 1) // RELABEL_CHUNK
+    targets = jax.lax.fori_loop(0, filled, chunk_targets, jnp.zeros((chunks, RELABEL_CHUNK), jnp.float32))
+    return targets.reshape(-1)[: buffer.capacity]
+
+
+def update_step(env: NoveltyEnv, config: TrainConfig, learner: Learner,
+                targets: jax.Array) -> tuple[Learner, jax.Array]:
+    """One Adam step on a uniform minibatch of (transition, target), then a polyak step of the target net."""
+    net = QNetwork(config.hidden_sizes)
+    key, k_sample = jax.random.split(learner.key)
+    index = jax.random.randint(k_sample, (config.batch_size,), 0, jnp.maximum(learner.buffer.size, 1))
+    batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
+
+    def loss_fn(params):
+        q = net.apply(params, encode(env, batch.features, batch.skill, batch.param))
+        return jnp.mean((q - targets[index]) ** 2)
+
+    loss, grads = jax.value_and_grad(loss_fn)(learner.params)
+    updates, opt_state = make_optimizer(config).update(grads, learner.opt_state, learner.params)
+    params = optax.apply_updates(learner.params, updates)
+    target_params = optax.incremental_update(params, learner.target_params, config.polyak_tau)
+    learner = learner.replace(params=params, target_params=target_params, opt_state=opt_state, key=key,
+                              updates=learner.updates + 1)
+    return learner, loss
+
+
+def learn(env: NoveltyEnv, config: TrainConfig, learner: Learner) -> tuple[Learner, jax.Array]:
+    """Relabel the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty).
+    Returns the mean loss."""
+    key, k_relabel = jax.random.split(learner.key)
+    targets = relabel(env, config, learner, k_relabel)
+    learner = learner.replace(key=key)
+
+    def body(learner, _):
+        updated, loss = update_step(env, config, learner, targets)
+        ready = learner.buffer.size > 0
+        return jax.tree.map(lambda a, b: jnp.where(ready, a, b), updated, learner), jnp.where(ready, loss, 0.0)
+
+    learner, losses = jax.lax.scan(body, learner, None, length=config.updates_per_cycle)
+    return learner, jnp.mean(losses)

@@ -1,0 +1,144 @@
+"""The online learning loop: per cycle, training episodes, double-DQN updates, greedy test evaluation.
+
+One jitted `cycle` runs a whole cycle for every seed at once: the episodes of all seeds form one batch
+of the meta-policy rollout (the planner's table lookups, the bridge's decisions and the env steps of
+every seed and episode advance together), the learner updates are `vmap`ped over seeds. A host loop
+over cycles drives progress, logging and checkpoints; nothing inside a cycle touches the host.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Any, Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from envs_jax import env_class
+from jaxbridge.config import TrainConfig
+from jaxbridge.dqn import Learner, epsilon, init_learner, learn
+from jaxbridge.meta_policy import rollout
+from jaxbridge.q_bridge import QBridgeParams, QNetwork, make_q_bridge
+from jaxbridge.replay import add
+from jaxbridge.tasks import TaskBatch, evaluation_batch, make_batch
+from jaxbridge.transitions import episode_transitions
+
+
+@struct.dataclass
+class CycleMetrics:
+    """One cycle's numbers, one entry per seed."""
+
+    test_solve_rate: jax.Array
+    train_success_rate: jax.Array
+    train_env_steps: jax.Array
+    train_decisions: jax.Array  # bridge decisions in this cycle's training episodes
+    test_env_steps: jax.Array
+    epsilon: jax.Array  # during this cycle's training episodes
+    loss: jax.Array  # mean TD loss of this cycle's updates
+    buffer_size: jax.Array
+    table_misses: jax.Array  # planner lookups answered by the host planner (train + test)
+
+
+@dataclass
+class Experiment:
+    """The static side of a run: config, tasks of every seed, the network and the bridge."""
+
+    config: TrainConfig
+    train: TaskBatch  # seed-major: episodes_per_cycle copies of each seed's training task
+    test: TaskBatch  # seed-major: each seed's test tasks
+    net: QNetwork
+    train_bridge: Callable
+    test_bridge: Callable
+
+    @property
+    def env(self):
+        return self.test.env
+
+
+def build_experiment(config: TrainConfig) -> Experiment:
+    env_cls = env_class(config.env)
+    seeds = config.seeds
+    train_specs = [env_cls.train_task(s) for s in seeds for _ in range(config.episodes_per_cycle)]
+    train_owner = [s for s in seeds for _ in range(config.episodes_per_cycle)]
+    train = make_batch(env_cls, train_specs, train_owner, horizons=[config.train_steps] * len(train_specs))
+    test = evaluation_batch(env_cls, seeds, config.num_test_tasks)
+    net = QNetwork(config.hidden_sizes)
+    return Experiment(config, train, test, net, make_q_bridge(train.env, net, config.n_sample),
+                      make_q_bridge(test.env, net, config.n_sample))
+
+
+def init_learners(experiment: Experiment) -> Learner:
+    """One learner per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""
+    keys = jnp.stack([jax.random.key(s) for s in experiment.config.seeds])
+    return jax.vmap(partial(init_learner, experiment.train.env, experiment.config))(keys)
+
+
+def _per_episode(tree: Any, owner: np.ndarray) -> Any:
+    """Give every episode its seed's copy of a per-seed pytree."""
+    return jax.tree.map(lambda x: x[owner], tree)
+
+
+def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, CycleMetrics]]:
+    config, train, test = experiment.config, experiment.train, experiment.test
+    seeds, episodes, num_tests = config.num_seeds, config.episodes_per_cycle, config.num_test_tasks
+    train_owner = np.repeat(np.arange(seeds), episodes)
+    test_owner = np.repeat(np.arange(seeds), num_tests)
+    call_planner = train.env.num_skills
+
+    def cycle(learners: Learner, train_tasks, train_tables, train_horizons, test_tasks, test_tables,
+              test_horizons) -> tuple[Learner, CycleMetrics]:
+        keys = jax.vmap(lambda k: jax.random.split(k, 4))(learners.key)
+        k_next, k_train, k_learn, k_test = (keys[:, i] for i in range(4))
+
+        # 1. Training episodes, epsilon-greedy, on every seed's training task.
+        eps = epsilon(config, learners.decisions)
+        explore = QBridgeParams(q=_per_episode(learners.params, train_owner), epsilon=eps[train_owner])
+        episode_keys = jax.vmap(lambda k: jax.random.split(k, episodes))(k_train).reshape(-1)
+        result, records = rollout(train.env, experiment.train_bridge, explore, train_tasks, train_tables,
+                                  train_horizons, episode_keys, config.train_steps, record=True)
+
+        # 2. One transition per bridge decision into each seed's replay buffer.
+        transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
+            records, result.success, call_planner, config.call_planner_bonus)
+        by_seed = lambda x: x.reshape((seeds, -1) + x.shape[2:])
+        buffers = jax.vmap(add)(learners.buffer, jax.tree.map(by_seed, transitions), by_seed(valid))
+        decisions = result.bridge_decisions.reshape(seeds, episodes).sum(1)
+        learners = learners.replace(buffer=buffers, decisions=learners.decisions + decisions, key=k_learn)
+
+        # 3. Double-DQN updates, every seed its own.
+        learners, loss = jax.vmap(partial(learn, train.env, config))(learners)
+        learners = learners.replace(key=k_next)
+
+        # 4. Greedy evaluation on every seed's test tasks.
+        greedy = QBridgeParams(q=_per_episode(learners.params, test_owner),
+                               epsilon=jnp.zeros(len(test_owner), jnp.float32))
+        test_keys = jax.vmap(lambda k: jax.random.split(k, num_tests))(k_test).reshape(-1)
+        tested, _ = rollout(test.env, experiment.test_bridge, greedy, test_tasks, test_tables, test_horizons,
+                            test_keys, test.max_steps)
+
+        per_seed = lambda x, n: x.reshape(seeds, n)
+        metrics = CycleMetrics(
+            test_solve_rate=per_seed(tested.success, num_tests).mean(1),
+            train_success_rate=per_seed(result.success, episodes).mean(1),
+            train_env_steps=per_seed(result.steps, episodes).sum(1),
+            train_decisions=decisions,
+            test_env_steps=per_seed(tested.steps, num_tests).sum(1),
+            epsilon=eps, loss=loss, buffer_size=learners.buffer.size,
+            table_misses=per_seed(result.table_misses, episodes).sum(1)
+            + per_seed(tested.table_misses, num_tests).sum(1))
+        return learners, metrics
+
+    jitted = jax.jit(cycle, donate_argnums=0)
+    return lambda learners: jitted(learners, train.tasks, train.tables, train.horizons, test.tasks,
+                                   test.tables, test.horizons)
+
+
+def smooth(rates: np.ndarray, window: int = 25) -> np.ndarray:
+    """The paper's smooth reward: value at cycle i (1-based, after i cycles) = sum of the rates of the
+    `window` cycles before it / window (ramps up from 0 over the first `window` cycles).
+    rates: [..., cycles]."""
+    cumulative = np.concatenate([np.zeros(rates.shape[:-1] + (1,)), np.cumsum(rates, axis=-1)], axis=-1)
+    i = np.arange(1, rates.shape[-1] + 1)
+    return (cumulative[..., i] - cumulative[..., np.maximum(i - window, 0)]) / window

@@ -1,0 +1,117 @@
+"""The learned bridge: a Q-function over (object-centric features, skill, parameter), as in MapleQ.
+
+Q input = features(s) ++ one_hot(skill over the env's skills + CallPlanner) ++ [param]. The greedy
+action is the argmax over every applicable skill with `n_sample` parameters drawn from its sampler
+(one for skills whose sampler is a constant) and CallPlanner when applicable. Training explores
+epsilon-greedily with the random bridge.
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, tree_where
+from jaxbridge.bridges import Bridge, random_bridge
+
+
+class UniformDense(nn.Module):
+    """Dense layer initialised as PyTorch's nn.Linear (the authors' network): weights and biases
+    uniform in +-scale/sqrt(fan_in)."""
+
+    features: int
+    scale: float = 1.0
+
+    @nn.compact
+    def __call__(self, x: jax.Array) -> jax.Array:
+        bound = self.scale / np.sqrt(x.shape[-1])
+        init = lambda key, shape: jax.random.uniform(key, shape, jnp.float32, -bound, bound)
+        kernel = self.param("kernel", init, (x.shape[-1], self.features))
+        bias = self.param("bias", init, (self.features,))
+        return x @ kernel + bias
+
+
+class QNetwork(nn.Module):
+    """MLP with ReLU hidden layers and a scalar output.
+
+    The output layer starts at zero, so the untrained Q is 0 everywhere (the authors' untrained Q is
+    too). With random output weights, the first fits on sparse rewards (nearly all targets 0) shrink
+    the random outputs by switching hidden ReLUs off, and some seeds ended with a dead, constant
+    network that never fitted its few rewarded transitions."""
+
+    hidden_sizes: Sequence[int] = (32, 32)
+
+    @nn.compact
+    def __call__(self, x: jax.Array) -> jax.Array:
+        for size in self.hidden_sizes:
+            x = nn.relu(UniformDense(size)(x))
+        return UniformDense(1, scale=0.0)(x)[..., 0]
+
+
+def input_size(env: NoveltyEnv) -> int:
+    return env.num_features + env.num_skills + 1 + 1
+
+
+def encode(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Array) -> jax.Array:
+    """The Q-network input for (features, skill, param); broadcasts over leading axes."""
+    shape = jnp.broadcast_shapes(features.shape[:-1], skill.shape, param.shape)
+    one_hot = jax.nn.one_hot(skill, env.num_skills + 1)
+    return jnp.concatenate([jnp.broadcast_to(features, shape + features.shape[-1:]),
+                            jnp.broadcast_to(one_hot, shape + one_hot.shape[-1:]),
+                            jnp.broadcast_to(param, shape)[..., None]], axis=-1)
+
+
+def candidate_skills(env: NoveltyEnv, n_sample: int) -> np.ndarray:
+    """Static list of candidate skills: n_sample copies of each skill with a uniform sampler, one of
+    each constant-parameter skill, then CallPlanner."""
+    counts = [n_sample if s.param_low != s.param_high else 1 for s in env.skills]
+    return np.array(sum(([k] * c for k, c in enumerate(counts)), []) + [env.num_skills], np.int32)
+
+
+def sample_candidates(env: NoveltyEnv, skills: np.ndarray, key: jax.Array) -> jax.Array:
+    """float32[C]: a parameter for each candidate from its skill's sampler (0 for CallPlanner).
+
+    Stratified: the j-th of a skill's n candidates is uniform in the j-th n-quantile of the sampler's
+    range. Each sample is still uniform over the range when its stratum is picked at random, but the n
+    samples cover the range evenly, so a narrow good interval (a door key's +-0.1) is never missed by
+    chance. (The authors drew the n samples independently.)"""
+    _, first, counts = np.unique(skills, return_index=True, return_counts=True)
+    stratum = np.arange(len(skills)) - np.repeat(first, counts)
+    size = np.repeat(counts, counts)
+    u = (stratum + jax.random.uniform(key, skills.shape)) / size
+    is_env_skill = skills < env.num_skills
+    return jnp.where(is_env_skill, env.param_from_uniform(np.minimum(skills, env.num_skills - 1), u), 0.0)
+
+
+def best_candidate(env: NoveltyEnv, net: QNetwork, q_params: Any, features: jax.Array, num_ground: jax.Array,
+                   skills: np.ndarray, key: jax.Array) -> tuple[BridgeAction, jax.Array]:
+    """argmax over the applicable candidates of Q(features, skill, param); also returns the max Q."""
+    params = sample_candidates(env, skills, key)
+    q = net.apply(q_params, encode(env, features, jnp.asarray(skills), params))
+    q = jnp.where(num_ground[skills] > 0, q, -jnp.inf)
+    best = jnp.argmax(q)
+    return BridgeAction(skill=jnp.asarray(skills)[best], param=params[best]), q[best]
+
+
+@struct.dataclass
+class QBridgeParams:
+    q: Any  # network parameters
+    epsilon: jax.Array  # float32: exploration rate (0 = greedy)
+
+
+def make_q_bridge(env: NoveltyEnv, net: QNetwork, n_sample: int) -> Bridge:
+    """Epsilon-greedy Q bridge; with epsilon 0 it is the greedy bridge used at test time."""
+    skills = candidate_skills(env, n_sample)
+    explore_with = random_bridge(env)
+
+    def act(params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
+        k_explore, k_random, k_greedy = jax.random.split(key, 3)
+        greedy, _ = best_candidate(env, net, params.q, obs.features, obs.num_ground, skills, k_greedy)
+        explore = jax.random.uniform(k_explore) < params.epsilon
+        return tree_where(explore, explore_with(None, obs, k_random), greedy)
+
+    return act
