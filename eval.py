@@ -1,15 +1,18 @@
-"""Evaluate a bridge policy on every seed's test tasks and print a table.
+"""Evaluate bridge policies on every seed's test tasks and print a table.
 
-    python eval.py --env light_switch_door --bridge oracle --num-seeds 8
+    python eval.py runs/light_switch_door                    # a trained run's latest checkpoint
+    python eval.py runs/light_switch_door --cells 40 --doors 8   # ... on larger tasks
+    python eval.py --env light_switch_door --bridge oracle --num-seeds 8   # a hand-made bridge
 """
 from __future__ import annotations
 
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from envs_jax import ENVS
-from jaxbridge.cli import non_negative_int, positive_int, run_main
+from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
 
 BRIDGE_HELP = ("oracle: the env's hand-written novelty fixer; random: a uniformly random applicable "
                "action whenever stuck; none: pure planning (re-plan whenever stuck)")
@@ -17,6 +20,12 @@ BRIDGE_HELP = ("oracle: the env's hand-written novelty fixer; random: a uniforml
 
 def parse_args(argv):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("run", nargs="?", type=Path, default=None,
+                        help="a run directory written by train.py: evaluate its latest checkpoint greedily")
+    parser.add_argument("--cells", type=positive_int, default=None,
+                        help="with a run: evaluate on tasks of this many cells (Light Switch Door) instead of the test tasks")
+    parser.add_argument("--doors", type=non_negative_int, default=None,
+                        help="with --cells: doors per task, in distinct cells other than the light's")
     parser.add_argument("--env", default="light_switch_door", choices=sorted(ENVS),
                         help="environment (default: %(default)s)")
     parser.add_argument("--bridge", default="oracle", choices=["oracle", "random", "none"],
@@ -31,8 +40,37 @@ def parse_args(argv):
     return parser.parse_args(argv)
 
 
+def evaluate_checkpoint(args) -> int:
+    from jaxbridge.evaluate import evaluate_run, format_table, summarise
+
+    if not (args.run / "config.json").is_file():
+        raise UsageError(f"{args.run} is not a run directory (no config.json); train one with train.py")
+    if (args.cells is None) != (args.doors is None):
+        raise UsageError("--cells and --doors go together")
+    sized = None
+    if args.cells is not None:
+        from envs_jax import light_switch_door as lsd
+        if args.doors > args.cells - 1:
+            raise UsageError(f"--doors must be at most cells - 1 = {args.cells - 1}, got {args.doors}")
+        sized = lambda rng: lsd.sized_task(rng, args.cells, args.doors)
+    start = time.perf_counter()
+    try:
+        config, step, batch, result = evaluate_run(args.run, sized, args.num_tasks, args.rollout_seed)
+    except FileNotFoundError as err:
+        raise UsageError(str(err)) from None
+    if config.env != "light_switch_door" and sized is not None:
+        raise UsageError("--cells/--doors apply to light_switch_door runs only")
+    what = f"{args.num_tasks} tasks of {args.cells} cells, {args.doors} doors per seed" if sized else "test tasks"
+    print(f"{args.run}: {config.env}, checkpoint of cycle {step}, greedy bridge, {what} "
+          f"({time.perf_counter() - start:.1f} s including compilation)")
+    print(format_table(summarise(batch, result)))
+    return 0
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
+    if args.run is not None:
+        return evaluate_checkpoint(args)
     from jaxbridge.bridges import make_bridge
     from jaxbridge.evaluate import format_table, run_bridge, summarise
     from jaxbridge.tasks import evaluation_batch

@@ -23,7 +23,7 @@ class TrainConfig:
     """Env steps per training episode at most (the paper: 100); it also ends at the goal."""
     num_test_tasks: int = 10
     """Test tasks per seed, evaluated greedily after every cycle (the paper: 10)."""
-    updates_per_cycle: int = 100
+    updates_per_cycle: int = 1000
     """Double-DQN minibatch updates after each cycle's episodes (see docs/DESIGN.md for the choice)."""
     batch_size: int = 64
     """Minibatch size (the paper: 64)."""

@@ -58,3 +58,34 @@ def format_table(rows: list[SeedSummary]) -> str:
                  f"{mean(lambda r: r.mean_steps):>10.1f}  {mean(lambda r: r.planner_calls):>18.1f}  "
                  f"{mean(lambda r: r.bridge_decisions):>21.1f}  {sum(r.table_misses for r in rows):>12d}")
     return "\n".join(lines)
+
+
+def greedy_params(learners, owner: np.ndarray):
+    """Each episode gets its seed's network, epsilon 0."""
+    import jax.numpy as jnp
+
+    from jaxbridge.q_bridge import QBridgeParams
+    return QBridgeParams(q=jax.tree.map(lambda x: x[owner], learners.params),
+                         epsilon=jnp.zeros(len(owner), jnp.float32))
+
+
+def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
+    """Greedy evaluation of a run's latest checkpoint on each seed's test tasks, or on tasks drawn by
+    `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed)."""
+    from jaxbridge.q_bridge import make_q_bridge
+    from jaxbridge.runner import load_learners
+    from jaxbridge.tasks import make_batch
+
+    config, experiment, learners, step = load_learners(run_dir)
+    batch = experiment.test
+    if sized_specs is not None:
+        specs, owners = [], []
+        for s in config.seeds:
+            rng = np.random.default_rng(s + 20000)
+            specs += [sized_specs(rng) for _ in range(num_tasks)]
+            owners += [s] * num_tasks
+        batch = make_batch(type(experiment.env), specs, owners)
+    owner = np.searchsorted(np.asarray(config.seeds), batch.seeds)
+    bridge = make_q_bridge(batch.env, experiment.net, config.n_sample)
+    result = run_bridge(batch, bridge, greedy_params(learners, owner), seed)
+    return config, step, batch, result
