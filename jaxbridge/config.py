@@ -34,7 +34,10 @@ class TrainConfig:
     grad_clip: float = 5.0
     """Global gradient-norm clip (the paper: 5)."""
     polyak_tau: float = 0.0025
-    """Target-network soft update per minibatch update (the paper: 0.0025)."""
+    """Target-network soft update step (the paper: 0.0025)."""
+    polyak_per: str = "update"
+    """When the target takes a polyak step: after every minibatch "update", or per training bridge
+    "decision" (the authors' code). See docs/RESULTS.md for the comparison."""
     hidden_sizes: tuple[int, ...] = (32, 32)
     """Q-network hidden layers (the paper: [32, 32])."""
     n_sample: int = 100

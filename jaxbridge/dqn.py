@@ -102,15 +102,30 @@ def update_step(env: NoveltyEnv, config: TrainConfig, learner: Learner,
     loss, grads = jax.value_and_grad(loss_fn)(learner.params)
     updates, opt_state = make_optimizer(config).update(grads, learner.opt_state, learner.params)
     params = optax.apply_updates(learner.params, updates)
-    target_params = optax.incremental_update(params, learner.target_params, config.polyak_tau)
-    learner = learner.replace(params=params, target_params=target_params, opt_state=opt_state, key=key,
+    target = learner.target_params
+    if config.polyak_per == "update":
+        target = optax.incremental_update(params, target, config.polyak_tau)
+    learner = learner.replace(params=params, target_params=target, opt_state=opt_state, key=key,
                               updates=learner.updates + 1)
     return learner, loss
 
 
-def learn(env: NoveltyEnv, config: TrainConfig, learner: Learner) -> tuple[Learner, jax.Array]:
-    """Relabel the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty).
+def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) -> Learner:
+    """The authors' polyak schedule: one soft update of the target towards the online net per training
+    bridge decision, i.e. (1 - tau)^decisions of the old target is kept."""
+    if config.polyak_per != "decision":
+        return learner
+    keep = (1.0 - config.polyak_tau) ** decisions.astype(jnp.float32)
+    target = jax.tree.map(lambda t, p: keep * t + (1.0 - keep) * p, learner.target_params, learner.params)
+    return learner.replace(target_params=target)
+
+
+def learn(env: NoveltyEnv, config: TrainConfig, learner: Learner,
+          decisions: jax.Array) -> tuple[Learner, jax.Array]:
+    """After a cycle's episodes (`decisions` training bridge decisions): track the target net, relabel
+    the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty).
     Returns the mean loss."""
+    learner = track_target(config, learner, decisions)
     key, k_relabel = jax.random.split(learner.key)
     targets = relabel(env, config, learner, k_relabel)
     learner = learner.replace(key=key)

@@ -108,7 +108,7 @@ def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, Cyc
         learners = learners.replace(buffer=buffers, decisions=learners.decisions + decisions, key=k_learn)
 
         # 3. Double-DQN updates, every seed its own.
-        learners, loss = jax.vmap(partial(learn, train.env, config))(learners)
+        learners, loss = jax.vmap(partial(learn, train.env, config))(learners, decisions)
         learners = learners.replace(key=k_next)
 
         # 4. Greedy evaluation on every seed's test tasks.
@@ -136,9 +136,9 @@ def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, Cyc
 
 
 def smooth(rates: np.ndarray, window: int = 25) -> np.ndarray:
-    """The paper's smooth reward: value at cycle i (1-based, after i cycles) = sum of the rates of the
-    `window` cycles before it / window (ramps up from 0 over the first `window` cycles).
-    rates: [..., cycles]."""
+    """The paper's smooth reward (reference/results.md): the value at cycle c (1-based) is the sum of
+    the rates of cycles c-25 .. c-1 divided by 25, so it ramps up from 0 over the first 25 cycles and
+    excludes cycle c itself. rates: [..., cycles] -> [..., cycles]."""
     cumulative = np.concatenate([np.zeros(rates.shape[:-1] + (1,)), np.cumsum(rates, axis=-1)], axis=-1)
-    i = np.arange(1, rates.shape[-1] + 1)
-    return (cumulative[..., i] - cumulative[..., np.maximum(i - window, 0)]) / window
+    before = np.arange(rates.shape[-1])  # cycles completed before cycle c = c - 1
+    return (cumulative[..., before] - cumulative[..., np.maximum(before - window, 0)]) / window

@@ -1,0 +1,153 @@
+"""The learner: epsilon schedule, double-DQN targets, replay buffer, transitions, seeding, checkpoints."""
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from envs_jax import light_switch_door as lsd
+from envs_jax.light_switch_door import LightSwitchDoor
+from jaxbridge import checkpoint
+from jaxbridge.bridges import make_bridge
+from jaxbridge.config import TrainConfig
+from jaxbridge.dqn import epsilon, init_learner, td_targets
+from jaxbridge.meta_policy import rollout
+from jaxbridge.online import build_experiment, init_learners, make_cycle, smooth
+from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
+from jaxbridge.replay import add, init_buffer, sample
+from jaxbridge.tasks import make_batch
+from jaxbridge.transitions import Transition, episode_transitions
+
+ENV = LightSwitchDoor(5, 1)
+TINY = TrainConfig(num_seeds=2, cycles=3, updates_per_cycle=20, num_test_tasks=3, n_sample=10)
+
+
+def test_epsilon_anneals_linearly_per_decision_to_its_floor():
+    cfg = TrainConfig()
+    assert float(epsilon(cfg, jnp.int32(0))) == 1.0
+    assert float(epsilon(cfg, jnp.int32(10000))) == pytest.approx(1.0 - 0.38)
+    assert float(epsilon(cfg, jnp.int32(25000))) == pytest.approx(0.05, abs=1e-6)
+    assert float(epsilon(cfg, jnp.int32(10 ** 6))) == pytest.approx(0.05, abs=1e-6)
+    values = np.asarray(epsilon(cfg, jnp.arange(0, 30000, 1000)))
+    assert np.all(np.diff(values) <= 0)
+
+
+def test_double_dqn_target_on_a_hand_built_batch():
+    cfg = TrainConfig()
+    net = QNetwork(cfg.hidden_sizes)
+    x0 = jnp.zeros((1, input_size(ENV)))
+    # Random output layers (the default starts them at 0) so that the two nets disagree.
+    def random_net(key):
+        params = net.init(key, x0)
+        out = params["params"]["UniformDense_2"]
+        out = {"kernel": jax.random.normal(key, out["kernel"].shape), "bias": out["bias"]}
+        return {"params": {**params["params"], "UniformDense_2": out}}
+    online, target = random_net(jax.random.key(1)), random_net(jax.random.key(2))
+    move, light, call_planner = ENV.skill_index("MoveRobot"), ENV.skill_index("TurnOnLight"), ENV.num_skills
+    features = jnp.array([[1.0, 0.2, 0.5, 0.3, 0.75], [0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 0.5, 0.5, 0.8, 0.75]])
+    # Only constant-parameter skills are applicable next, so the candidates are known exactly.
+    ground = jnp.array([[1, 1, 0, 0, 0, 1], [2, 0, 0, 0, 0, 0], [1, 1, 0, 0, 0, 0]], jnp.int32)
+    batch = Transition(features=features, skill=jnp.array([3, 0, 5]), param=jnp.array([0.1, 0.0, 0.0]),
+                       reward=jnp.array([0.0, 0.0, 1.0]), done=jnp.array([False, False, True]),
+                       next_features=features[::-1], next_num_ground=ground)
+    y = np.asarray(td_targets(ENV, cfg, online, target, batch, jax.random.key(0)))
+
+    def q(params, f, skill, param):
+        return float(net.apply(params, encode(ENV, f, jnp.int32(skill), jnp.float32(param))))
+
+    candidates = {move: 0.0, light: 0.75, call_planner: 0.0}
+    for i in range(2):
+        allowed = [k for k in candidates if ground[i, k] > 0]
+        chosen = max(allowed, key=lambda k: q(online, batch.next_features[i], k, candidates[k]))
+        expected = 0.0 + cfg.gamma * q(target, batch.next_features[i], chosen, candidates[chosen])
+        assert y[i] == pytest.approx(expected, abs=1e-5)
+    assert y[2] == 1.0  # terminal: no bootstrapping
+
+
+def test_replay_buffer_masked_insert_wraps_fifo_and_samples_stored_items():
+    buffer = init_buffer(jnp.float32(0), capacity=4)
+    buffer = add(buffer, jnp.arange(1.0, 6.0), jnp.array([True, False, True, True, False]))
+    assert int(buffer.size) == 3 and np.asarray(buffer.data).tolist() == [1.0, 3.0, 4.0, 0.0]
+    buffer = add(buffer, jnp.array([10.0, 11.0, 12.0]), jnp.array([True, True, True]))
+    assert int(buffer.size) == 4 and np.asarray(buffer.data).tolist() == [11.0, 12.0, 4.0, 10.0]
+    assert int(buffer.insert_at) == 2
+    drawn = np.asarray(sample(buffer, jax.random.key(0), 200))
+    assert set(drawn.tolist()) == {4.0, 10.0, 11.0, 12.0}
+
+
+def test_one_transition_per_decision_and_call_planner_spans_the_plan():
+    spec = lsd.LightSwitchDoorTask(5, (1,))
+    batch = make_batch(LightSwitchDoor, [spec], [0], horizons=[100], env=ENV)
+    result, rec = rollout(ENV, make_bridge("oracle", ENV), None, batch.tasks, batch.tables, batch.horizons,
+                          jax.random.split(jax.random.key(0), 1), 100, record=True)
+    records = jax.tree.map(lambda x: x[:, 0], rec)
+    transitions, valid = episode_transitions(records, result.success[0], ENV.num_skills, 0.5)
+    t = np.nonzero(np.asarray(valid))[0]
+    assert len(t) == 3  # MoveKey, TurnKey, CallPlanner
+    assert np.asarray(transitions.skill)[t].tolist() == [ENV.skill_index("MoveKey"), ENV.skill_index("TurnKey"),
+                                                         ENV.num_skills]
+    assert np.asarray(transitions.reward)[t].tolist() == [0.0, 0.0, 1.5]  # with the CallPlanner bonus
+    assert np.asarray(transitions.done)[t].tolist() == [False, False, True]
+    assert np.allclose(transitions.next_features[t[0]], records.features[t[1]])
+    assert int(result.steps[0]) == spec.shortest_solution  # CallPlanner's transition ran the plan to the goal
+
+
+def test_different_seeds_get_different_networks_and_the_same_seed_the_same():
+    a = init_learner(ENV, TINY, jax.random.key(0))
+    b = init_learner(ENV, TINY, jax.random.key(1))
+    c = init_learner(ENV, TINY, jax.random.key(0))
+    kernel = lambda learner: np.asarray(learner.params["params"]["UniformDense_0"]["kernel"])
+    assert not np.array_equal(kernel(a), kernel(b)) and np.array_equal(kernel(a), kernel(c))
+
+
+def _train(config):
+    experiment = build_experiment(config)
+    learners, cycle = init_learners(experiment), make_cycle(experiment)
+    history = []
+    for _ in range(config.cycles):
+        learners, metrics = cycle(learners)
+        history.append(jax.tree.map(np.asarray, metrics))
+    return experiment, learners, history
+
+
+def test_the_same_seeds_give_identical_metrics_twice():
+    _, la, ha = _train(TINY)
+    _, lb, hb = _train(TINY)
+    for ma, mb in zip(ha, hb):
+        assert all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(ma), jax.tree.leaves(mb)))
+    assert all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(la.params), jax.tree.leaves(lb.params)))
+    assert not np.array_equal(ha[-1].loss[0], ha[-1].loss[1])  # the two seeds learn differently
+
+
+def test_checkpoint_round_trip_restores_identical_greedy_actions(tmp_path):
+    experiment, learners, _ = _train(TINY)
+    checkpoint.save(tmp_path / "ckpt", 3, learners, {"cycle": 3})
+    fresh = init_learners(experiment)
+    restored, record, step = checkpoint.restore(tmp_path / "ckpt", fresh)
+    assert step == 3 and record == {"cycle": 3}
+    as_data = lambda tree: jax.tree.leaves(tree.replace(key=jax.random.key_data(tree.key)))
+    assert all(np.array_equal(x, y) for x, y in zip(as_data(learners), as_data(restored)))
+    net, skills = experiment.net, candidate_skills(ENV, 10)
+    features = jax.random.uniform(jax.random.key(5), (32, ENV.num_features))
+    ground = jnp.ones((32, ENV.num_skills + 1), jnp.int32)
+    keys = jax.random.split(jax.random.key(6), 32)
+
+    def greedy(params):
+        action, _ = jax.vmap(lambda f, g, k: best_candidate(ENV, net, params, f, g, skills, k))(features, ground, keys)
+        return np.asarray(action.skill), np.asarray(action.param)
+    for seed in range(TINY.num_seeds):
+        before = greedy(jax.tree.map(lambda x: x[seed], learners.params))
+        after = greedy(jax.tree.map(lambda x: x[seed], restored.params))
+        assert all(np.array_equal(x, y) for x, y in zip(before, after))
+
+
+def test_smooth_reward_is_the_papers_trailing_window():
+    # Value at cycle c (1-based) = sum of the rates of cycles c-25 .. c-1, / 25.
+    s = smooth(np.ones((1, 30)))
+    assert s[0, 0] == 0.0 and s[0, 1] == pytest.approx(1 / 25) and s[0, 25] == 1.0 and s[0, 29] == 1.0
+    rates = np.zeros((1, 40))
+    rates[0, 5] = 1.0  # cycle 6
+    s = smooth(rates)
+    assert s[0, 5] == 0.0 and s[0, 6] == pytest.approx(1 / 25) and s[0, 30] == pytest.approx(1 / 25)
+    assert s[0, 31] == 0.0
