@@ -32,6 +32,8 @@ def parse_args(argv):
                    help="training episodes per cycle (default: %(default)s, the paper's)")
     p.add_argument("--updates-per-cycle", type=non_negative_int, default=DEFAULTS.updates_per_cycle,
                    help="double-DQN minibatch updates per cycle (default: %(default)s)")
+    p.add_argument("--batch-size", type=positive_int, default=DEFAULTS.batch_size,
+                   help="minibatch size of the updates (default: %(default)s; the paper: 64)")
     p.add_argument("--call-planner-bonus", type=float, default=DEFAULTS.call_planner_bonus,
                    help="extra reward when CallPlanner reaches the goal (the authors' code: 0.5; default: %(default)s)")
     p.add_argument("--checkpoint-every", type=positive_int, default=DEFAULTS.checkpoint_every,
@@ -49,6 +51,7 @@ def main(argv=None) -> int:
 
     config = TrainConfig(env=args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles,
                          episodes_per_cycle=args.episodes_per_cycle, updates_per_cycle=args.updates_per_cycle,
+                         batch_size=args.batch_size,
                          call_planner_bonus=args.call_planner_bonus, checkpoint_every=args.checkpoint_every)
     run_dir = args.out / (args.name or args.env)
     try:

@@ -151,3 +151,13 @@ def test_smooth_reward_is_the_papers_trailing_window():
     s = smooth(rates)
     assert s[0, 5] == 0.0 and s[0, 6] == pytest.approx(1 / 25) and s[0, 30] == pytest.approx(1 / 25)
     assert s[0, 31] == 0.0
+
+
+def test_a_short_learning_run_beats_the_random_bridge():
+    config = TrainConfig(num_seeds=2, first_seed=1, cycles=12, updates_per_cycle=500, num_test_tasks=5)
+    experiment, _, history = _train(config)
+    learned = np.stack([m.test_solve_rate for m in history[-5:]]).mean(0)  # per seed, last 5 cycles
+    from jaxbridge.evaluate import run_bridge
+    random = run_bridge(experiment.test, make_bridge("random", experiment.test.env), seed=0).success.mean()
+    assert learned.max() >= 0.8 and learned.max() > random
+    assert history[-1].train_success_rate.max() > history[0].train_success_rate.max()

@@ -1,0 +1,55 @@
+"""Wall-clock of the paper's protocol for our method: 8 seeds x 100 cycles on Light Switch Door.
+
+    python -m bench.training [--num-seeds 8] [--cycles 100]
+
+Prints the time to build tasks and plans, the first cycle (mostly compilation), the steady-state
+seconds per cycle, the total, and the ratio to the authors' run time (results.md: 17,572 s for one
+seed's whole run, 4,939 s of it learning).
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import jax
+import numpy as np
+
+from jaxbridge.config import TrainConfig
+from jaxbridge.online import build_experiment, init_learners, make_cycle
+
+AUTHORS_WHOLE_RUN_S = 17_572  # one seed, one approach, 100 cycles (mean; results.md)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
+    parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
+    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
+    args = parser.parse_args()
+    config = TrainConfig(env=args.env, num_seeds=args.num_seeds, cycles=args.cycles)
+    start = time.perf_counter()
+    experiment = build_experiment(config)
+    learners = init_learners(experiment)
+    cycle = make_cycle(experiment)
+    built = time.perf_counter()
+    times, rates = [], []
+    for _ in range(config.cycles):
+        t0 = time.perf_counter()
+        learners, metrics = cycle(learners)
+        rates.append(float(np.asarray(metrics.test_solve_rate).mean()))
+        times.append(time.perf_counter() - t0)
+    total = time.perf_counter() - start
+    steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
+    per_seed_run = total / config.num_seeds
+    print(f"jax {jax.__version__}, devices: {jax.devices()}")
+    print(f"{config.env}: {config.num_seeds} seeds x {config.cycles} cycles, {config.updates_per_cycle} updates/cycle, "
+          f"batch {config.batch_size}")
+    print(f"tasks + plan tables: {built - start:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "
+          f"steady state: {steady:.3f} s/cycle")
+    print(f"total: {total:.1f} s; final mean test solve rate {rates[-1]:.2f}")
+    print(f"authors: {AUTHORS_WHOLE_RUN_S:,} s per seed-run; ours: {per_seed_run:.1f} s per seed-run "
+          f"-> {AUTHORS_WHOLE_RUN_S / per_seed_run:,.0f}x")
+
+
+if __name__ == "__main__":
+    main()
