@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from pathlib import Path
@@ -43,12 +44,19 @@ def parse_args(argv):
 def evaluate_checkpoint(args) -> int:
     from jaxbridge.evaluate import evaluate_run, format_table, summarise
 
-    if not (args.run / "config.json").is_file():
+    config_path = args.run / "config.json"
+    if not config_path.is_file():
         raise UsageError(f"{args.run} is not a run directory (no config.json); train one with train.py")
+    try:
+        env = json.loads(config_path.read_text())["env"]
+    except (ValueError, KeyError):
+        raise UsageError(f"{config_path} is not a valid run config") from None
     if (args.cells is None) != (args.doors is None):
         raise UsageError("--cells and --doors go together")
     sized = None
     if args.cells is not None:
+        if env != "light_switch_door":
+            raise UsageError(f"--cells/--doors apply to light_switch_door runs only, this run is {env}")
         from envs_jax import light_switch_door as lsd
         if args.doors > args.cells - 1:
             raise UsageError(f"--doors must be at most cells - 1 = {args.cells - 1}, got {args.doors}")
@@ -56,10 +64,8 @@ def evaluate_checkpoint(args) -> int:
     start = time.perf_counter()
     try:
         config, step, batch, result = evaluate_run(args.run, sized, args.num_tasks, args.rollout_seed)
-    except FileNotFoundError as err:
+    except (FileNotFoundError, ValueError) as err:
         raise UsageError(str(err)) from None
-    if config.env != "light_switch_door" and sized is not None:
-        raise UsageError("--cells/--doors apply to light_switch_door runs only")
     what = f"{args.num_tasks} tasks of {args.cells} cells, {args.doors} doors per seed" if sized else "test tasks"
     print(f"{args.run}: {config.env}, checkpoint of cycle {step}, greedy bridge, {what} "
           f"({time.perf_counter() - start:.1f} s including compilation)")
