@@ -24,7 +24,6 @@ def main() -> None:
     parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value")
     args = parser.parse_args()
     config = TrainConfig(num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
-    fields = {f.name: f for f in dataclasses.fields(TrainConfig)}
     changes = {}
     for item in args.overrides:
         name, value = item.split("=", 1)

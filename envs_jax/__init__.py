@@ -10,3 +10,5 @@ def env_class(name: str) -> type[NoveltyEnv]:
     if name not in ENVS:
         raise ValueError(f"unknown env {name!r}; choose from {', '.join(sorted(ENVS))}")
     return ENVS[name]
+
+__all__ = ['BridgeAction', 'BridgeObs', 'NoveltyEnv', 'SkillCall', 'SkillSpec', 'LightSwitchDoor', 'ENVS', 'env_class']

@@ -26,7 +26,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, SkillCall, idle_call, tree_where
+from envs_jax.base import BridgeObs, NoveltyEnv, SkillCall, idle_call, tree_where
 from jaxbridge.bridges import Bridge
 from planner.tables import PlanLookup, PlanTable, batched_plan_lookup, holds_all, num_words, pack_atoms
 

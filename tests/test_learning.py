@@ -1,5 +1,4 @@
 """The learner: epsilon schedule, double-DQN targets, replay buffer, transitions, seeding, checkpoints."""
-import dataclasses
 
 import jax
 import jax.numpy as jnp
