@@ -42,6 +42,7 @@ def parse_args(argv):
 
 
 def evaluate_checkpoint(args) -> int:
+    from jaxbridge.checkpoint import CheckpointError
     from jaxbridge.evaluate import evaluate_run, format_table, summarise
 
     config_path = args.run / "config.json"
@@ -64,7 +65,7 @@ def evaluate_checkpoint(args) -> int:
     start = time.perf_counter()
     try:
         config, step, batch, result = evaluate_run(args.run, sized, args.num_tasks, args.rollout_seed)
-    except (FileNotFoundError, ValueError) as err:
+    except (CheckpointError, ValueError) as err:
         raise UsageError(str(err)) from None
     what = f"{args.num_tasks} tasks of {args.cells} cells, {args.doors} doors per seed" if sized else "test tasks"
     print(f"{args.run}: {config.env}, checkpoint of cycle {step}, greedy bridge, {what} "

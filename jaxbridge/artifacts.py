@@ -17,7 +17,7 @@ import numpy as np
 from jaxbridge.online import smooth
 
 METRIC_FIELDS = ("test_solve_rate", "train_success_rate", "train_env_steps", "train_decisions", "test_env_steps",
-                 "epsilon", "loss", "buffer_size", "table_misses")
+                 "epsilon", "loss", "q_abs_max", "buffer_size", "table_misses")
 REPORT_CYCLES = (10, 25, 50, 100)
 
 
@@ -111,7 +111,6 @@ def write_run_files(run_dir: Path, config_dict: dict, history: list, seeds: list
                     label: str = "ours") -> dict:
     arrays = history_arrays(history)
     info = summary(history, seeds, elapsed_s)
-    write_atomic(run_dir / "config.json", json.dumps(config_dict, indent=2) + "\n")
     write_atomic(run_dir / "metrics.csv", metrics_csv(history, seeds))
     write_atomic(run_dir / "summary.json", json.dumps(info, indent=2) + "\n")
     curves = {label: {"test": arrays["test_solve_rate"], "train": arrays["train_success_rate"]}}

@@ -97,9 +97,9 @@ def update_step(env: NoveltyEnv, config: TrainConfig, learner: Learner,
 
     def loss_fn(params):
         q = net.apply(params, encode(env, batch.features, batch.skill, batch.param))
-        return jnp.mean((q - targets[index]) ** 2)
+        return jnp.mean((q - targets[index]) ** 2), jnp.max(jnp.abs(q))
 
-    loss, grads = jax.value_and_grad(loss_fn)(learner.params)
+    (loss, q_abs_max), grads = jax.value_and_grad(loss_fn, has_aux=True)(learner.params)
     updates, opt_state = make_optimizer(config).update(grads, learner.opt_state, learner.params)
     params = optax.apply_updates(learner.params, updates)
     target = learner.target_params
@@ -107,7 +107,7 @@ def update_step(env: NoveltyEnv, config: TrainConfig, learner: Learner,
         target = optax.incremental_update(params, target, config.polyak_tau)
     learner = learner.replace(params=params, target_params=target, opt_state=opt_state, key=key,
                               updates=learner.updates + 1)
-    return learner, loss
+    return learner, (loss, q_abs_max)
 
 
 def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) -> Learner:
@@ -121,19 +121,22 @@ def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) ->
 
 
 def learn(env: NoveltyEnv, config: TrainConfig, learner: Learner,
-          decisions: jax.Array) -> tuple[Learner, jax.Array]:
+          decisions: jax.Array) -> tuple[Learner, jax.Array, jax.Array]:
     """After a cycle's episodes (`decisions` training bridge decisions): track the target net, relabel
     the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty).
-    Returns the mean loss."""
+    Returns the learner, the mean loss and the largest |Q| predicted in the minibatches."""
     learner = track_target(config, learner, decisions)
     key, k_relabel = jax.random.split(learner.key)
     targets = relabel(env, config, learner, k_relabel)
     learner = learner.replace(key=key)
 
     def body(learner, _):
-        updated, loss = update_step(env, config, learner, targets)
+        updated, (loss, q_abs_max) = update_step(env, config, learner, targets)
         ready = learner.buffer.size > 0
-        return jax.tree.map(lambda a, b: jnp.where(ready, a, b), updated, learner), jnp.where(ready, loss, 0.0)
+        stats = (jnp.where(ready, loss, 0.0), jnp.where(ready, q_abs_max, 0.0))
+        return jax.tree.map(lambda a, b: jnp.where(ready, a, b), updated, learner), stats
 
-    learner, losses = jax.lax.scan(body, learner, None, length=config.updates_per_cycle)
-    return learner, jnp.mean(losses)
+    if config.updates_per_cycle == 0:
+        return learner, jnp.float32(0.0), jnp.float32(0.0)
+    learner, (losses, q_abs) = jax.lax.scan(body, learner, None, length=config.updates_per_cycle)
+    return learner, jnp.mean(losses), jnp.max(q_abs)

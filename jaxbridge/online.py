@@ -37,6 +37,7 @@ class CycleMetrics:
     test_env_steps: jax.Array
     epsilon: jax.Array  # during this cycle's training episodes
     loss: jax.Array  # mean TD loss of this cycle's updates
+    q_abs_max: jax.Array  # largest |Q| predicted in this cycle's updates (a non-finite value stops a run)
     buffer_size: jax.Array
     table_misses: jax.Array  # planner lookups answered by the host planner (train + test)
 
@@ -108,7 +109,7 @@ def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, Cyc
         learners = learners.replace(buffer=buffers, decisions=learners.decisions + decisions, key=k_learn)
 
         # 3. Double-DQN updates, every seed its own.
-        learners, loss = jax.vmap(partial(learn, train.env, config))(learners, decisions)
+        learners, loss, q_abs_max = jax.vmap(partial(learn, train.env, config))(learners, decisions)
         learners = learners.replace(key=k_next)
 
         # 4. Greedy evaluation on every seed's test tasks.
@@ -125,12 +126,14 @@ def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, Cyc
             train_env_steps=per_seed(result.steps, episodes).sum(1),
             train_decisions=decisions,
             test_env_steps=per_seed(tested.steps, num_tests).sum(1),
-            epsilon=eps, loss=loss, buffer_size=learners.buffer.size,
+            epsilon=eps, loss=loss, q_abs_max=q_abs_max, buffer_size=learners.buffer.size,
             table_misses=per_seed(result.table_misses, episodes).sum(1)
             + per_seed(tested.table_misses, num_tests).sum(1))
         return learners, metrics
 
-    jitted = jax.jit(cycle, donate_argnums=0)
+    # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical fault
+    # during a cycle can still checkpoint the last good one.
+    jitted = jax.jit(cycle)
     return lambda learners: jitted(learners, train.tasks, train.tables, train.horizons, test.tasks,
                                    test.tables, test.horizons)
 

@@ -1,0 +1,141 @@
+"""Faults: a run killed mid-training resumes exactly; damaged checkpoints are refused; a NaN stops the
+run keeping the last good checkpoint; bad input gets one line and exit code 2."""
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxbridge import checkpoint
+from jaxbridge.config import TrainConfig
+from jaxbridge.online import build_experiment, init_learners
+from jaxbridge.runner import NumericalFault, prepare_run_dir, train
+
+ROOT = Path(__file__).resolve().parents[1]
+SMALL = ["--num-seeds", "2", "--cycles", "6", "--updates-per-cycle", "50", "--checkpoint-every", "1", "--no-progress"]
+
+
+def cli(*args):
+    return subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
+
+
+def final_params(run_dir: Path):
+    config = TrainConfig.from_dict(json.loads((run_dir / "config.json").read_text()))
+    state, _, step = checkpoint.restore(run_dir / "checkpoints", init_learners(build_experiment(config)))
+    return step, jax.tree.leaves(state.params)
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("runs")
+    proc = cli("train.py", *SMALL, "--out", str(out), "--name", "whole")
+    assert proc.returncode == 0, proc.stderr
+    return out / "whole"
+
+
+def test_a_run_killed_mid_training_resumes_to_identical_metrics_and_parameters(uninterrupted, tmp_path):
+    run_dir = tmp_path / "killed"
+    proc = subprocess.Popen([sys.executable, "train.py", *SMALL, "--out", str(tmp_path), "--name", "killed"],
+                            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 300
+    while not (run_dir / "checkpoints" / "3.sha256.json").exists():
+        assert proc.poll() is None and time.time() < deadline, "the run ended before it could be killed"
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    resumed = cli("train.py", "--resume", str(run_dir), "--no-progress")
+    assert resumed.returncode == 0, resumed.stderr
+    assert (run_dir / "metrics.csv").read_text() == (uninterrupted / "metrics.csv").read_text()
+    step_a, params_a = final_params(uninterrupted)
+    step_b, params_b = final_params(run_dir)
+    assert step_a == step_b == 6
+    assert all(np.array_equal(a, b) for a, b in zip(params_a, params_b))
+
+
+@pytest.mark.parametrize("damage", ["flip", "truncate"])
+def test_a_damaged_checkpoint_is_refused(uninterrupted, tmp_path, damage):
+    import shutil
+    run_dir = tmp_path / "copy"
+    shutil.copytree(uninterrupted, run_dir)
+    latest = run_dir / "checkpoints" / "6"
+    target = max((p for p in latest.rglob("*") if p.is_file()), key=lambda p: p.stat().st_size)
+    data = bytearray(target.read_bytes())
+    if damage == "flip":
+        data[len(data) // 2] ^= 0xFF
+    else:
+        data = data[: len(data) // 2]
+    target.write_bytes(bytes(data))
+    for args in (["eval.py", str(run_dir)], ["train.py", "--resume", str(run_dir)]):
+        proc = cli(*args)
+        assert proc.returncode == 2 and "corrupted" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_a_non_finite_q_function_stops_the_run_and_keeps_the_last_good_checkpoint(tmp_path):
+    config = TrainConfig(num_seeds=2, cycles=4, updates_per_cycle=20, checkpoint_every=1, num_test_tasks=2)
+    run_dir = tmp_path / "nan"
+    prepare_run_dir(run_dir, overwrite=False)
+
+    def poison(cycle, learners):
+        if cycle != 3:
+            return learners
+        params = jax.tree.map(lambda x: x.at[1].set(jnp.nan), learners.params)  # seed 1's network
+        return learners.replace(params=params)
+
+    with pytest.raises(NumericalFault, match="cycle 3 in seed 1.*checkpoint is of cycle 2"):
+        train(config, run_dir, progress=False, fault_injection=poison)
+    assert checkpoint.sealed_steps(run_dir / "checkpoints") == [1, 2]
+    rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
+    assert {r["cycle"] for r in rows} == {"1", "2"}  # the files cover the good cycles only
+
+
+def test_a_checkpoint_of_another_config_version_is_refused(uninterrupted, tmp_path):
+    import shutil
+    run_dir = tmp_path / "old"
+    shutil.copytree(uninterrupted, run_dir)
+    config = json.loads((run_dir / "config.json").read_text())
+    config["config_version"] = 0
+    (run_dir / "config.json").write_text(json.dumps(config))
+    proc = cli("train.py", "--resume", str(run_dir))
+    assert proc.returncode == 2 and "config version 0 is not supported" in proc.stderr
+
+
+@pytest.mark.parametrize("args,message", [
+    (["train.py", "--resume", "/nonexistent/run"], "not a run directory"),
+    (["train.py", "--resume", "runs", "--cycles", "3"], "drop --cycles"),
+    (["train.py", "--out", "/proc/no/such/place", "--cycles", "1"], "cannot write run directory"),
+    (["train.py", "--episodes-per-cycle", "400"], "must fit the replay buffer"),
+    (["eval.py", "--help-me"], "unrecognized arguments"),
+])
+def test_more_bad_input(args, message):
+    proc = cli(*args)
+    assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_ctrl_c_saves_a_checkpoint_of_the_last_completed_cycle(uninterrupted, tmp_path):
+    run_dir = tmp_path / "interrupted"
+    args = ["--num-seeds", "2", "--cycles", "30", "--updates-per-cycle", "50", "--checkpoint-every", "100"]
+    proc = subprocess.Popen([sys.executable, "train.py", *args, "--out", str(tmp_path), "--name", "interrupted"],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    seen = b""
+    while b" 2/30 " not in seen:  # the progress bar has shown the second cycle: interrupt now
+        chunk = proc.stderr.read1(4096)
+        assert chunk, "the run ended before it could be interrupted"
+        seen += chunk
+    proc.send_signal(signal.SIGINT)
+    _, rest = proc.communicate(timeout=300)
+    err = (seen + rest).decode()
+    assert proc.returncode == 130 and "--resume" in err and "Traceback" not in err
+    saved = checkpoint.sealed_steps(run_dir / "checkpoints")
+    assert len(saved) == 1 and 2 <= saved[0] < 30  # checkpoint_every 100: Ctrl-C saved it
+    rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
+    assert len(rows) == 2 * saved[0]  # the files cover exactly the completed cycles
+    whole = {(r["seed"], r["cycle"]): r for r in csv.DictReader((uninterrupted / "metrics.csv").open())}
+    assert all(r == whole[(r["seed"], r["cycle"])] for r in rows if int(r["cycle"]) <= 6)
