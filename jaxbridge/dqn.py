@@ -11,7 +11,7 @@ from flax import struct
 from envs_jax.base import NoveltyEnv
 from jaxbridge.config import TrainConfig
 from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
-from jaxbridge.replay import ReplayBuffer, init_buffer
+from jaxbridge.replay import ReplayBuffer, init_buffer, sample_indices
 from jaxbridge.transitions import Transition
 
 
@@ -92,7 +92,7 @@ def update_step(env: NoveltyEnv, config: TrainConfig, learner: Learner,
     """One Adam step on a uniform minibatch of (transition, target), then a polyak step of the target net."""
     net = QNetwork(config.hidden_sizes)
     key, k_sample = jax.random.split(learner.key)
-    index = jax.random.randint(k_sample, (config.batch_size,), 0, jnp.maximum(learner.buffer.size, 1))
+    index = sample_indices(learner.buffer, k_sample, config.batch_size)  # targets are indexed by slot
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
 
     def loss_fn(params):

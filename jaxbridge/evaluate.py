@@ -60,18 +60,10 @@ def format_table(rows: list[SeedSummary]) -> str:
     return "\n".join(lines)
 
 
-def greedy_params(learners, owner: np.ndarray):
-    """Each episode gets its seed's network, epsilon 0."""
-    import jax.numpy as jnp
-
-    from jaxbridge.q_bridge import QBridgeParams
-    return QBridgeParams(q=jax.tree.map(lambda x: x[owner], learners.params),
-                         epsilon=jnp.zeros(len(owner), jnp.float32))
-
-
 def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
     """Greedy evaluation of a run's latest checkpoint on each seed's test tasks, or on tasks drawn by
     `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed)."""
+    from jaxbridge.online import episode_params
     from jaxbridge.q_bridge import make_q_bridge
     from jaxbridge.runner import load_learners
     from jaxbridge.tasks import make_batch
@@ -87,5 +79,6 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
         batch = make_batch(type(experiment.env), specs, owners)
     owner = np.searchsorted(np.asarray(config.seeds), batch.seeds)
     bridge = make_q_bridge(batch.env, experiment.net, config.n_sample)
-    result = run_bridge(batch, bridge, greedy_params(learners, owner), seed)
+    greedy = episode_params(learners, owner, np.zeros(len(owner), np.float32))
+    result = run_bridge(batch, bridge, greedy, seed)
     return config, step, batch, result

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import partial
-from typing import Any, Callable
+from typing import Callable
 
 import jax
 import jax.numpy as jnp
@@ -76,9 +76,10 @@ def init_learners(experiment: Experiment) -> Learner:
     return jax.vmap(partial(init_learner, experiment.train.env, experiment.config))(keys)
 
 
-def _per_episode(tree: Any, owner: np.ndarray) -> Any:
-    """Give every episode its seed's copy of a per-seed pytree."""
-    return jax.tree.map(lambda x: x[owner], tree)
+def episode_params(learners: Learner, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:
+    """Bridge parameters for a batch of episodes: each episode gets its seed's network (owner[i] is the
+    seed index of episode i) and exploration rate eps[i] (zeros for the greedy bridge)."""
+    return QBridgeParams(q=jax.tree.map(lambda x: x[owner], learners.params), epsilon=eps)
 
 
 def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, CycleMetrics]]:
@@ -95,7 +96,7 @@ def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, Cyc
 
         # 1. Training episodes, epsilon-greedy, on every seed's training task.
         eps = epsilon(config, learners.decisions)
-        explore = QBridgeParams(q=_per_episode(learners.params, train_owner), epsilon=eps[train_owner])
+        explore = episode_params(learners, train_owner, eps[train_owner])
         episode_keys = jax.vmap(lambda k: jax.random.split(k, episodes))(k_train).reshape(-1)
         result, records = rollout(train.env, experiment.train_bridge, explore, train_tasks, train_tables,
                                   train_horizons, episode_keys, config.train_steps, record=True)
@@ -113,8 +114,7 @@ def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, Cyc
         learners = learners.replace(key=k_next)
 
         # 4. Greedy evaluation on every seed's test tasks.
-        greedy = QBridgeParams(q=_per_episode(learners.params, test_owner),
-                               epsilon=jnp.zeros(len(test_owner), jnp.float32))
+        greedy = episode_params(learners, test_owner, jnp.zeros(len(test_owner), jnp.float32))
         test_keys = jax.vmap(lambda k: jax.random.split(k, num_tests))(k_test).reshape(-1)
         tested, _ = rollout(test.env, experiment.test_bridge, greedy, test_tasks, test_tables, test_horizons,
                             test_keys, test.max_steps)

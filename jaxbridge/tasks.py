@@ -36,7 +36,11 @@ def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizon
                env: NoveltyEnv | None = None) -> TaskBatch:
     """Pad and compile `specs` (test horizons by default) for an env sized to fit them all."""
     env = env or env_cls.for_tasks(specs)
-    compiled = [compile_task(env, s) for s in specs]
+    once: dict = {}  # repeated specs (a seed's training task, once per episode) share one compilation
+    for spec in specs:
+        if spec not in once:
+            once[spec] = compile_task(env, spec)
+    compiled = [once[spec] for spec in specs]
     horizons = [s.horizon for s in specs] if horizons is None else horizons
     return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(seeds), compiled=compiled,
                      tasks=env.stack_tasks(specs), tables=stack_tables(compiled),
