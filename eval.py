@@ -1,6 +1,7 @@
 """Evaluate bridge policies on every seed's test tasks and print a table.
 
-    python eval.py runs/light_switch_door                    # a trained run's latest checkpoint
+    python eval.py runs/light_switch_door                    # the latest checkpoint of the "ours" run
+    python eval.py runs/light_switch_door --approach no_callplanner   # ... of another approach
     python eval.py runs/light_switch_door --cells 40 --doors 8   # ... on larger tasks
     python eval.py --env light_switch_door --bridge oracle --num-seeds 8   # a hand-made bridge
 """
@@ -13,6 +14,7 @@ import time
 from pathlib import Path
 
 from envs_jax import ENVS
+from jaxbridge.approaches import APPROACHES
 from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
 
 BRIDGE_HELP = ("oracle: the env's hand-written novelty fixer; random: a uniformly random applicable "
@@ -22,7 +24,10 @@ BRIDGE_HELP = ("oracle: the env's hand-written novelty fixer; random: a uniforml
 def parse_args(argv):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("run", nargs="?", type=Path, default=None,
-                        help="a run directory written by train.py: evaluate its latest checkpoint greedily")
+                        help="an experiment directory written by train.py (or one approach's run directory in "
+                             "it): evaluate the latest checkpoint greedily")
+    parser.add_argument("--approach", choices=list(APPROACHES), default=None,
+                        help="with an experiment directory: which approach's run to evaluate (default: ours)")
     parser.add_argument("--cells", type=positive_int, default=None,
                         help="with a run: evaluate on tasks of this many cells (Light Switch Door) instead of the test tasks")
     parser.add_argument("--doors", type=non_negative_int, default=None,
@@ -41,10 +46,25 @@ def parse_args(argv):
     return parser.parse_args(argv)
 
 
+def run_directory(path: Path, approach: str | None) -> Path:
+    """The run to evaluate: `path` itself, or its approach's run inside an experiment directory."""
+    if (path / "experiment.json").is_file():
+        chosen = path / (approach or "ours")
+        if not (chosen / "config.json").is_file():
+            held = sorted(p.name for p in path.iterdir() if (p / "config.json").is_file())
+            raise UsageError(f"{path} holds no {approach or 'ours'} run (it holds: {', '.join(held) or 'none'}); "
+                             f"pick one with --approach")
+        return chosen
+    if approach is not None and (path / "config.json").is_file():
+        raise UsageError(f"--approach picks a run inside an experiment directory; {path} is a single run")
+    return path
+
+
 def evaluate_checkpoint(args) -> int:
     from jaxbridge.checkpoint import CheckpointError
     from jaxbridge.evaluate import evaluate_run, format_table, summarise
 
+    args.run = run_directory(args.run, args.approach)
     config_path = args.run / "config.json"
     if not config_path.is_file():
         raise UsageError(f"{args.run} is not a run directory (no config.json); train one with train.py")
@@ -68,7 +88,7 @@ def evaluate_checkpoint(args) -> int:
     except (CheckpointError, ValueError) as err:
         raise UsageError(str(err)) from None
     what = f"{args.num_tasks} tasks of {args.cells} cells, {args.doors} doors per seed" if sized else "test tasks"
-    print(f"{args.run}: {config.env}, checkpoint of cycle {step}, greedy bridge, {what} "
+    print(f"{args.run}: {config.env}, {config.approach}, checkpoint of cycle {step}, greedy bridge, {what} "
           f"({time.perf_counter() - start:.1f} s including compilation)")
     print(format_table(summarise(batch, result)))
     return 0
@@ -76,6 +96,8 @@ def evaluate_checkpoint(args) -> int:
 
 def main(argv=None) -> int:
     args = parse_args(argv)
+    if args.approach is not None and args.run is None:
+        raise UsageError("--approach needs an experiment directory to pick the run from")
     if args.run is not None:
         return evaluate_checkpoint(args)
     from jaxbridge.bridges import make_bridge

@@ -1,11 +1,17 @@
-"""Train bridge policies for every seed at once and write a run directory.
+"""Train the paper's approaches for every seed at once and write an experiment directory.
 
-    python train.py --env light_switch_door --num-seeds 8
-    python train.py --resume runs/light_switch_door      # continue after a crash or Ctrl-C
+    python train.py --env light_switch_door --num-seeds 8         # all six approaches: the paper's figure
+    python train.py --env light_switch_door --approaches ours     # just our method
+    python train.py --resume runs/light_switch_door               # continue after a crash or Ctrl-C
 
-The run directory (default runs/<env>) gets config.json, metrics.csv (one row per seed x cycle),
-summary.json, curves.png (test and training smooth reward) and checkpoints/ (orbax, whole learner state),
-which eval.py loads. Exit codes: 0 done, 2 bad input, 3 numerical fault, 130 interrupted.
+Approaches: ours (bridge policy learning), no_feature_selection, no_callplanner, random (random bridge),
+pure_planning, maple_q (pure RL); see jaxbridge/approaches.py.
+
+The experiment directory (default runs/<env>) gets curves.png (test and training smooth reward of every
+approach, mean and min-max band over seeds), results.md and results.csv (test solve rate at cycles
+10/25/50/100 and the final smooth reward), and one run directory per approach with config.json,
+metrics.csv (one row per seed x cycle), summary.json, curves.png and checkpoints/ (orbax, whole learner
+state), which eval.py loads. Exit codes: 0 done, 2 bad input, 3 numerical fault, 130 interrupted.
 """
 from __future__ import annotations
 
@@ -14,6 +20,7 @@ import sys
 from pathlib import Path
 
 from envs_jax import ENVS
+from jaxbridge.approaches import APPROACHES
 from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
 from jaxbridge.config import TrainConfig
 
@@ -25,10 +32,27 @@ CONFIG_FLAGS = {"env": "env", "num_seeds": "num_seeds", "first_seed": "first_see
                 "checkpoint_every": "checkpoint_every"}
 
 
+def approach_list(text: str) -> list[str]:
+    """argparse type: "all" or a comma-separated list of approach names."""
+    if text.strip() == "all":
+        return list(APPROACHES)
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in names if n not in APPROACHES]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(f"unknown approach {', '.join(unknown) or repr(text)}; "
+                                         f"choose from all, {', '.join(APPROACHES)}")
+    if len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(f"an approach is listed twice in {text!r}")
+    return names
+
+
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     d = DEFAULTS
     p.add_argument("--env", choices=sorted(ENVS), help=f"environment (default: {d.env})")
+    p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
+                   help="comma-separated approaches to train, or all (default: all, the paper's six: "
+                        f"{', '.join(APPROACHES)})")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,
@@ -45,10 +69,11 @@ def parse_args(argv):
     p.add_argument("--checkpoint-every", type=positive_int,
                    help=f"save the learner state every N cycles and at the end (default: {d.checkpoint_every})")
     p.add_argument("--out", type=Path, default=Path("runs"), help="parent of run directories (default: %(default)s)")
-    p.add_argument("--name", default=None, help="run directory name under --out (default: the env name)")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing run directory of the same name")
-    p.add_argument("--resume", type=Path, metavar="RUN_DIR", default=None,
-                   help="continue the run in RUN_DIR from its latest checkpoint, with its saved config")
+    p.add_argument("--name", default=None, help="experiment directory name under --out (default: the env name)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing experiment directory of the same name")
+    p.add_argument("--resume", type=Path, metavar="DIR", default=None,
+                   help="continue the experiment (or single approach's run) in DIR from its latest checkpoints, "
+                        "with its saved config")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
     return p.parse_args(argv)
 
@@ -62,46 +87,64 @@ def make_config(args) -> TrainConfig:
     return config
 
 
+def report(name: str, info: dict) -> str:
+    at = info["test_solve_rate_at"]
+    last = max((int(c) for c in at), default=None)
+    return (f"{name:>20}: mean test solve rate at the last cycle {info['mean_test_solve_rate_per_cycle'][-1]:.2f}; "
+            f"smooth reward at cycle {info['cycles']}: {info['smooth_reward_final']['mean']:.3f}"
+            + (f"; at cycle {last}: {at[str(last)]['mean']:.2f}" if last else "") + f" ({info['elapsed_s']:.0f} s)")
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
+    import time
     from jaxbridge.checkpoint import CheckpointError
-    from jaxbridge.runner import Interrupted, NumericalFault, load_config, prepare_run_dir, train
+    from jaxbridge.runner import (Interrupted, NumericalFault, is_experiment_dir, load_config, load_experiment,
+                                  prepare_run_dir, train, train_approaches)
 
+    start = time.perf_counter()
+    progress = not args.no_progress
     if args.resume is not None:
         clashing = [f"--{flag.replace('_', '-')}" for flag in CONFIG_FLAGS if getattr(args, flag) is not None]
-        clashing += [f for f, on in (("--overwrite", args.overwrite), ("--name", args.name)) if on]
+        clashing += [f for f, on in (("--overwrite", args.overwrite), ("--name", args.name),
+                                     ("--approaches", args.approaches is not None)) if on]
         if clashing:
             raise UsageError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")
-        run_dir = args.resume
+        out_dir = args.resume
         try:
-            config = load_config(run_dir)
+            if is_experiment_dir(out_dir):
+                config, approaches = load_experiment(out_dir)
+                run = lambda: train_approaches(config, approaches, out_dir, progress, resume=True)
+            else:  # one approach's run directory
+                config = load_config(out_dir)
+                run = lambda: {config.approach: train(config, out_dir, progress, resume=True)}
         except ValueError as err:
             raise UsageError(str(err)) from None
     else:
         config = make_config(args)
-        run_dir = args.out / (args.name or config.env)
+        approaches = args.approaches or list(APPROACHES)
+        out_dir = args.out / (args.name or config.env)
         try:
-            prepare_run_dir(run_dir, args.overwrite)
+            prepare_run_dir(out_dir, args.overwrite)
         except FileExistsError as err:
             raise UsageError(str(err)) from None
         except OSError as err:
-            raise UsageError(f"cannot write run directory {run_dir}: {err.strerror}") from None
+            raise UsageError(f"cannot write experiment directory {out_dir}: {err.strerror}") from None
+        run = lambda: train_approaches(config, approaches, out_dir, progress)
     try:
-        info = train(config, run_dir, progress=not args.no_progress, resume=args.resume is not None)
+        summaries = run()
     except CheckpointError as err:
         raise UsageError(str(err)) from None
     except NumericalFault as err:
         print(f"error: {err}", file=sys.stderr)
         return 3
     except Interrupted as err:
-        print(f"{err}; continue with: python train.py --resume {run_dir}", file=sys.stderr)
+        print(f"{err}; continue with: python train.py --resume {out_dir}", file=sys.stderr)
         return 130
-    at = info["test_solve_rate_at"]
-    last = max((int(c) for c in at), default=None)
-    print(f"done in {info['elapsed_s']:.0f} s -> {run_dir}/")
-    print(f"mean test solve rate at the last cycle: {info['mean_test_solve_rate_per_cycle'][-1]:.2f}; "
-          f"smooth reward at cycle {info['cycles']}: {info['smooth_reward_final']['mean']:.3f}"
-          + (f"; at cycle {last}: {at[str(last)]['mean']:.2f}" if last else ""))
+    print(f"done in {time.perf_counter() - start:.0f} s -> {out_dir}/"
+          + ("  (figure: curves.png, tables: results.md)" if is_experiment_dir(out_dir) else ""))
+    for name, info in summaries.items():
+        print(report(name, info))
     return 0
 
 

@@ -1,46 +1,72 @@
-"""Print a run's results as the markdown table of docs/RESULTS.md, beside the authors' numbers, and
-copy its figure into docs/figures/.
+"""Print an experiment's results as the markdown table of docs/RESULTS.md, each approach beside the
+authors' numbers, rebuild its comparison files, and copy its figure into docs/figures/.
 
     python -m bench.report runs/light_switch_door
 """
 from __future__ import annotations
 
 import argparse
-import json
 import shutil
+import sys
 from pathlib import Path
 
-# reference/results.md: test solve rate of "ours", mean [min, max] over 8 seeds; smooth reward at 100.
-AUTHORS = {"light_switch_door": {"10": "0.33 [0, 1]", "25": "0.72 [0, 1]", "50": "0.57 [0, 1]",
-                                 "100": "0.64 [0, 1]", "smooth": "0.74", "time": "17,572 s per seed (about 4.9 h)"}}
+from jaxbridge.artifacts import REPORT_CYCLES
+from jaxbridge.comparison import write_comparison
+from jaxbridge.runner import is_experiment_dir, load_experiment
+
+# reference/results.md: test solve rate, mean [min, max] over the seeds with logs; smooth reward at 100.
+AUTHORS = {
+    "light_switch_door": {
+        "ours": ("0.33 [0, 1]", "0.72 [0, 1]", "0.57 [0, 1]", "0.64 [0, 1]", "0.74", "8 seeds"),
+        "no_feature_selection": ("-", "-", "-", "-", "-", "log not public"),
+        "no_callplanner": ("0", "0", "0", "0", "0", "7 seeds"),
+        "random": ("0", "0", "0", "0", "0", "6 seeds"),
+        "pure_planning": ("0 (single evaluation)", "", "", "", "", "4 seeds"),
+        "maple_q": ("0", "0", "0", "0", "0", "6 seeds; grounded on the training task only"),
+    },
+    "doorknobs": {
+        "ours": ("0.30", "0.70", "1.00", "1.00", "0.996", "1 seed"),
+        "pure_planning": ("0 (single evaluation)", "", "", "", "", "6 seeds"),
+    },
+    "coffee": {
+        "ours": ("0.14 [0, 1]", "0.00", "0.14 [0, 1]", "0.06 [0, 0.2]", "~0.04", "7 seeds"),
+        "pure_planning": ("0 (single evaluation)", "", "", "", "", "4 seeds"),
+    },
+}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("run", type=Path, help="a run directory written by train.py")
+    parser.add_argument("experiment", type=Path, help="an experiment directory written by train.py")
     args = parser.parse_args()
-    summary = json.loads((args.run / "summary.json").read_text())
-    config = json.loads((args.run / "config.json").read_text())
-    env = config["env"]
-    authors = AUTHORS.get(env, {})
-    print(f"| {env} | cycle 10 | cycle 25 | cycle 50 | cycle 100 | smooth reward at 100 | run time |")
-    print("|---|---|---|---|---|---|---|")
-    ours = summary["test_solve_rate_at"]
-    cell = lambda c: (f"{ours[c]['mean']:.2f} [{ours[c]['min']:.1f}, {ours[c]['max']:.1f}]" if c in ours else "-")
-    print(f"| ours (jaxbridge, {len(summary['seeds'])} seeds) | {cell('10')} | {cell('25')} | {cell('50')} | "
-          f"{cell('100')} | {summary['smooth_reward_final']['mean']:.3f} | {summary['elapsed_s']:.0f} s for all seeds |")
-    if authors:
-        print(f"| authors (8 seeds) | {authors['10']} | {authors['25']} | {authors['50']} | {authors['100']} | "
-              f"{authors['smooth']} | {authors['time']} |")
-    rates = summary["mean_test_solve_rate_per_cycle"]
-    from_30 = rates[29:]
-    if from_30:
-        print(f"\nmean test solve rate from cycle 30 on: min {min(from_30):.3f}; first cycle with mean >= 0.9: "
-              f"{next((i + 1 for i, r in enumerate(rates) if r >= 0.9), None)}")
+    if not is_experiment_dir(args.experiment):
+        sys.exit(f"error: {args.experiment} is not an experiment directory (no experiment.json)")
+    config, approaches = load_experiment(args.experiment)
+    approaches = [a for a in approaches if (args.experiment / a / "metrics.csv").is_file()]
+    rows = write_comparison(args.experiment, config.env, approaches)
+    authors = AUTHORS.get(config.env, {})
+
+    def cell(row, c):
+        if f"cycle_{c}" not in row:
+            return "-"
+        mean, low, high = row[f"cycle_{c}"]
+        return f"{mean:.2f}" if low == high else f"{mean:.2f} [{low:.1f}, {high:.1f}]"
+
+    print(f"| {config.env} | seeds | " + " | ".join(f"cycle {c}" for c in REPORT_CYCLES)
+          + " | smooth reward at 100 (test) | smooth training reward at 100 |")
+    print("|---|---|" + "---|" * (len(REPORT_CYCLES) + 2))
+    for row in rows:
+        print(f"| **{row['label']}** (jaxbridge) | {row['seeds']} | "
+              + " | ".join(cell(row, c) for c in REPORT_CYCLES)
+              + f" | **{row['smooth_test']:.3f}** | {row['smooth_train']:.3f} |")
+        if row["approach"] in authors:
+            *values, smooth, note = authors[row["approach"]]
+            print(f"| {row['label']} (authors, {note}) | | " + " | ".join(values) + f" | {smooth} | |")
     figures = Path("docs/figures")
     figures.mkdir(parents=True, exist_ok=True)
-    shutil.copy(args.run / "curves.png", figures / f"{env}_curves.png")
-    print(f"figure copied to {figures / f'{env}_curves.png'}")
+    target = figures / f"{config.env}_approaches.png"
+    shutil.copy(args.experiment / "curves.png", target)
+    print(f"\nfigure copied to {target}")
 
 
 if __name__ == "__main__":

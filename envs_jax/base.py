@@ -10,7 +10,8 @@ capacity (max cells, rooms, cups...) that fixes every array shape, so it can be 
 * device, pure and vmappable: `reset(task) -> State`, `step(state, action) -> State`,
   `abstract(state) -> bool[num_atoms]` (fluent atoms in a fixed layout), `goal_reached(state)`,
   `state_vector(state)` (the low-level state, for "did anything change"), `features(state, stuck_state)`
-  (the bridge's object-centric observation), and the skills: `skill_action(state, call)`,
+  (the bridge's object-centric observation), `full_state(state)` (every object's raw features padded
+  to `full_state_size`, the "no feature selection" observation), and the skills: `skill_action(state, call)`,
   `skill_done(prev_state, state, call)`, `skill_initiable(state)`.
 
 Skills are parameterised options. A ground skill is (skill id, slot, param): the slot picks the object
@@ -84,6 +85,7 @@ class NoveltyEnv:
     skills: ClassVar[tuple[SkillSpec, ...]]
     action_dim: ClassVar[int]
     num_features: ClassVar[int]
+    full_state_size: ClassVar[int]
 
     # ---- skills ---------------------------------------------------------------------------------
     @property

@@ -140,6 +140,9 @@ class LightSwitchDoor(NoveltyEnv):
               SkillSpec("TurnKey", -1.0, 1.0))
     action_dim = 4  # (dx, dlight, dmove, dturn)
     num_features = 5  # (door here, move_key, move_target, turn_key, turn_target)
+    # The full state (no feature selection) is padded to the largest task the env generates.
+    max_task_cells, max_task_doors = TEST_CELLS_RANGE[1], TEST_DOORS_RANGE[1]
+    full_state_size = 1 + 3 + max_task_cells + 5 * max_task_doors  # robot, light, cells, doors
     domain = DOMAIN
     train_task = staticmethod(train_task)
     test_tasks = staticmethod(test_tasks)
@@ -253,6 +256,22 @@ class LightSwitchDoor(NoveltyEnv):
         door = jnp.stack([state.move_key[d], state.task.move_target[d], state.turn_key[d],
                           state.task.turn_target[d]])
         return jnp.concatenate([has[None].astype(jnp.float32), jnp.where(has, door, 0.0)])
+
+    def full_state(self, state: State) -> jax.Array:
+        """Every object's raw features (method.md §4.3, "no feature selection"): robot x; light x,
+        level, target; each cell's x; each door's x, keys and targets; absent objects are zeros."""
+        if self.max_cells > self.max_task_cells or self.max_doors > self.max_task_doors:
+            raise ValueError(f"the full-state observation holds at most {self.max_task_cells} cells and "
+                             f"{self.max_task_doors} doors; this env has {self.max_cells} and {self.max_doors}")
+        task = state.task
+        cell_x = jnp.where(jnp.arange(self.max_cells) < task.num_cells, self._cell_centres(), 0.0)
+        has_door = task.door_cell >= 0
+        doors = jnp.stack([task.door_cell.astype(jnp.float32) + 0.5, state.move_key, task.move_target,
+                           state.turn_key, task.turn_target], axis=-1)
+        light = jnp.stack([task.num_cells.astype(jnp.float32) - 0.5, state.light_level, task.light_target])
+        vector = jnp.concatenate([state.robot_x[None], light, cell_x,
+                                  jnp.where(has_door[:, None], doors, 0.0).reshape(-1)])
+        return jnp.pad(vector, (0, self.full_state_size - vector.shape[0]))
 
     # ---- device: skills (all singleton: one action, then terminate) ----------------------------
     def skill_action(self, state: State, call: SkillCall) -> jax.Array:

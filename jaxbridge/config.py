@@ -4,13 +4,16 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-CONFIG_VERSION = 1
+CONFIG_VERSION = 2  # 2: `approach` (version 1 configs were all "ours" and still load)
 
 
 @dataclass(frozen=True)
 class TrainConfig:
     env: str = "light_switch_door"
     """Environment name."""
+    approach: str = "ours"
+    """Which of the paper's approaches (jaxbridge/approaches.py): ours, no_feature_selection,
+    no_callplanner, random, pure_planning, maple_q."""
     num_seeds: int = 8
     """Independent seeds, trained together in one vectorised computation."""
     first_seed: int = 0
@@ -67,8 +70,10 @@ class TrainConfig:
     def from_dict(cls, data: dict) -> "TrainConfig":
         data = dict(data)
         version = data.pop("config_version", None)
-        if version != CONFIG_VERSION:
-            raise ValueError(f"config version {version} is not supported (this release reads {CONFIG_VERSION})")
+        if version == 1:
+            data.setdefault("approach", "ours")
+        elif version != CONFIG_VERSION:
+            raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields
         if unknown:

@@ -9,7 +9,9 @@ import optax
 from flax import struct
 
 from envs_jax.base import NoveltyEnv
+from jaxbridge.approaches import get_approach
 from jaxbridge.config import TrainConfig
+from jaxbridge.meta_policy import observation_size
 from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
 from jaxbridge.replay import ReplayBuffer, init_buffer, sample_indices
 from jaxbridge.transitions import Transition
@@ -37,19 +39,24 @@ def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:
     return jnp.maximum(config.epsilon_end, config.epsilon_start - config.epsilon_decay * decisions)
 
 
-def empty_transition(env: NoveltyEnv) -> Transition:
-    f = jnp.zeros(env.num_features, jnp.float32)
+def empty_transition(num_features: int, num_skills: int) -> Transition:
+    f = jnp.zeros(num_features, jnp.float32)
     return Transition(features=f, skill=jnp.int32(0), param=jnp.float32(0), reward=jnp.float32(0),
                       done=jnp.bool_(True), next_features=f,
-                      next_num_ground=jnp.zeros(env.num_skills + 1, jnp.int32))
+                      next_num_ground=jnp.zeros(num_skills + 1, jnp.int32))
 
 
 def init_learner(env: NoveltyEnv, config: TrainConfig, key: jax.Array) -> Learner:
+    """A fresh network (the target starts as its copy), optimiser and empty replay buffer. The input
+    size follows the approach's observation (object-centric features or the full state)."""
     k_init, k_run = jax.random.split(key)
     net = QNetwork(config.hidden_sizes)
-    params = net.init(k_init, jnp.zeros((1, input_size(env)), jnp.float32))
-    return Learner(params=params, target_params=jax.tree.map(jnp.copy, params), opt_state=make_optimizer(config).init(params),
-                   buffer=init_buffer(empty_transition(env), config.buffer_capacity), key=k_run,
+    num_features = observation_size(env, get_approach(config.approach).controls)
+    params = net.init(k_init, jnp.zeros((1, input_size(env, num_features)), jnp.float32))
+    return Learner(params=params, target_params=jax.tree.map(jnp.copy, params),
+                   opt_state=make_optimizer(config).init(params),
+                   buffer=init_buffer(empty_transition(num_features, env.num_skills), config.buffer_capacity),
+                   key=k_run,
                    decisions=jnp.int32(0), updates=jnp.int32(0))
 
 

@@ -7,7 +7,7 @@ import jax
 import numpy as np
 
 from jaxbridge.bridges import Bridge
-from jaxbridge.meta_policy import EpisodeResult, rollout
+from jaxbridge.meta_policy import Controls, EpisodeResult, rollout
 from jaxbridge.tasks import TaskBatch
 
 
@@ -23,10 +23,11 @@ class SeedSummary:
     task_size: str  # e.g. "11 cells, 3 doors"
 
 
-def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0) -> EpisodeResult:
+def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0,
+               controls: Controls = Controls()) -> EpisodeResult:
     """One rollout of every task in the batch (bridge_params: None or batched over tasks)."""
     result, _ = rollout(batch.env, bridge, bridge_params, batch.tasks, batch.tables, batch.horizons,
-                        jax.random.split(jax.random.key(seed), batch.size), batch.max_steps)
+                        jax.random.split(jax.random.key(seed), batch.size), batch.max_steps, controls=controls)
     return jax.tree.map(np.asarray, result)
 
 
@@ -64,7 +65,6 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
     """Greedy evaluation of a run's latest checkpoint on each seed's test tasks, or on tasks drawn by
     `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed)."""
     from jaxbridge.online import episode_params
-    from jaxbridge.q_bridge import make_q_bridge
     from jaxbridge.runner import load_learners
     from jaxbridge.tasks import make_batch
 
@@ -78,7 +78,8 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
             owners += [s] * num_tasks
         batch = make_batch(type(experiment.env), specs, owners)
     owner = np.searchsorted(np.asarray(config.seeds), batch.seeds)
-    bridge = make_q_bridge(batch.env, experiment.net, config.n_sample)
+    approach = experiment.approach
+    bridge = approach.make_bridge(batch.env, experiment.net, config.n_sample)
     greedy = episode_params(learners, owner, np.zeros(len(owner), np.float32))
-    result = run_bridge(batch, bridge, greedy, seed)
+    result = run_bridge(batch, bridge, greedy, seed, approach.controls)
     return config, step, batch, result

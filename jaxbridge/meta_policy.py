@@ -19,6 +19,7 @@ Everything is branch-free (`jnp.where`), so it runs unchanged under `vmap`, `jit
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
@@ -33,6 +34,26 @@ from planner.tables import PlanLookup, PlanTable, batched_plan_lookup, holds_all
 PLANNER, BRIDGE = 0, 1
 # Who produced a step's action, as recorded in traces.
 ACTOR_PLANNER, ACTOR_BRIDGE, ACTOR_CALL_PLANNER = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class Controls:
+    """Which parts of the meta-policy an approach uses (static: each combination compiles once).
+
+    The paper's ablations switch these off (reference/method.md §6); everything else is shared."""
+
+    planner: bool = True  # False: pure RL, the bridge acts from the first step and nothing plans
+    call_planner: bool = True  # False: no CallPlanner; once stuck, the bridge keeps control
+    full_state: bool = False  # the bridge sees every object's raw features instead of the selected ones
+
+
+def observation_size(env: NoveltyEnv, controls: Controls) -> int:
+    return env.full_state_size if controls.full_state else env.num_features
+
+
+def observation(env: NoveltyEnv, controls: Controls, state: Any, stuck_state: Any) -> jax.Array:
+    """What the bridge sees: the env's object-centric features, or the full padded state."""
+    return env.full_state(state) if controls.full_state else env.features(state, stuck_state)
 
 
 @struct.dataclass
@@ -102,15 +123,18 @@ def same_state(a: jax.Array, b: jax.Array) -> jax.Array:
     return jnp.all(jnp.abs(a - b) <= 1e-8 + 1e-5 * jnp.abs(b))
 
 
-def start_episode(env: NoveltyEnv, task: Any, horizon: jax.Array) -> Episode:
+def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.Array) -> Episode:
+    """The planner starts in control with a plan from the initial state (without a planner, the bridge
+    starts)."""
     state = env.reset(task)
     vec = env.state_vector(state)
     zero = jnp.int32(0)
     return Episode(env_state=state, stuck_state=state, t=zero, horizon=jnp.int32(horizon),
-                   done=jnp.bool_(False), success=jnp.bool_(False), control=jnp.int32(PLANNER),
+                   done=jnp.bool_(False), success=jnp.bool_(False),
+                   control=jnp.int32(PLANNER if controls.planner else BRIDGE),
                    call=idle_call(), expected=jnp.zeros(num_words(env.num_atoms), jnp.uint32),
                    prev_vec=vec, planner_stepped=jnp.bool_(False), bridge_vec=vec,
-                   planner_calls=jnp.int32(1), table_misses=zero, bridge_decisions=zero,
+                   planner_calls=jnp.int32(int(controls.planner)), table_misses=zero, bridge_decisions=zero,
                    stuck_events=zero)
 
 
@@ -184,18 +208,19 @@ def planner_turn(env: NoveltyEnv, ep: Episode, key: jax.Array, plan: PlanLookup,
     return ep, decide
 
 
-def bridge_turn(env: NoveltyEnv, bridge: Bridge, params: Any, ep: Episode, table: PlanTable,
-                key: jax.Array, rng: jax.Array, choice_bits: jax.Array) -> Decision:
+def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any, ep: Episode,
+                table: PlanTable, key: jax.Array, rng: jax.Array, choice_bits: jax.Array) -> Decision:
     """The bridge observes, chooses a skill and parameter, and the choice is grounded uniformly at
-    random among the applicable ground operators of that skill (the Q-function does not see objects)."""
+    random among the applicable ground operators of that skill (the Q-function does not see objects).
+    CallPlanner is applicable once the state changed since the bridge took over (and never without it)."""
     state = ep.env_state
     vec = env.state_vector(state)
     op_ok = applicable_ops(env, table, key, state)
-    can_plan = ~same_state(vec, ep.bridge_vec)
+    can_plan = ~same_state(vec, ep.bridge_vec) & controls.call_planner
     num_ground = jnp.concatenate([count_by_skill(env, table, op_ok), can_plan[None].astype(jnp.int32)])
-    obs = BridgeObs(features=env.features(state, ep.stuck_state), num_ground=num_ground)
+    obs = BridgeObs(features=observation(env, controls, state, ep.stuck_state), num_ground=num_ground)
     choice = bridge(params, obs, rng)
-    skill = jnp.clip(choice.skill, 0, env.num_skills)
+    skill = jnp.clip(choice.skill, 0, env.num_skills if controls.call_planner else env.num_skills - 1)
     op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)
     return Decision(skill=skill.astype(jnp.int32), slot=table.op_slot[op], param=choice.param,
                     features=obs.features, num_ground=num_ground)
@@ -248,33 +273,42 @@ def step_randomness(keys: jax.Array, max_steps: int):
     return jax.tree.map(lambda x: jnp.swapaxes(x, 0, 1), jax.vmap(per_episode)(keys))
 
 
-@partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record"))
+def no_plan(num_episodes: int, words: int) -> PlanLookup:
+    return PlanLookup(found=jnp.zeros(num_episodes, bool), op=jnp.full(num_episodes, -1, jnp.int32),
+                      next_key=jnp.zeros((num_episodes, words), jnp.uint32), miss=jnp.zeros(num_episodes, bool))
+
+
+@partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls"))
 def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, tasks: Any, tables: PlanTable,
-            horizons: jax.Array, keys: jax.Array, max_steps: int, record: bool = False):
+            horizons: jax.Array, keys: jax.Array, max_steps: int, record: bool = False,
+            controls: Controls = Controls()):
     """Run the meta-policy on a batch of B episodes for at most `max_steps` env steps.
 
     tasks, tables, horizons, keys (one per episode) and bridge_params (None, or a pytree) carry a
-    leading batch axis B.
+    leading batch axis B. `controls` picks the approach's parts of the meta-policy.
     Returns EpisodeResult[B] and, with `record`, StepRecord[max_steps, B].
     """
     num_episodes = horizons.shape[0]
-    episodes = jax.vmap(partial(start_episode, env))(tasks, horizons)
+    episodes = jax.vmap(partial(start_episode, env, controls))(tasks, horizons)
     no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
                            param=jnp.zeros(num_episodes, jnp.float32),
-                           features=jnp.zeros((num_episodes, env.num_features), jnp.float32),
+                           features=jnp.zeros((num_episodes, observation_size(env, controls)), jnp.float32),
                            num_ground=jnp.zeros((num_episodes, env.num_skills + 1), jnp.int32))
 
     def step(episodes: Episode, randomness):
         param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]
         episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
-        plan = batched_plan_lookup(tables, packed, need_plan)
+        if controls.planner:
+            plan = batched_plan_lookup(tables, packed, need_plan)
+        else:  # pure RL: the control never returns to a planner, nothing is looked up
+            plan = no_plan(num_episodes, packed.shape[-1])
         stuck_before = episodes.stuck_events
         episodes, decide = jax.vmap(partial(planner_turn, env))(episodes, packed, plan, tables,
                                                                 param_uniforms)
         decision = jax.lax.cond(  # the bridge only runs on steps where some episode must choose
             jnp.any(decide),
-            lambda: jax.vmap(partial(bridge_turn, env, bridge))(bridge_params, episodes, tables, packed,
-                                                                 bridge_keys, choice_bits),
+            lambda: jax.vmap(partial(bridge_turn, env, controls, bridge))(bridge_params, episodes, tables, packed,
+                                                                           bridge_keys, choice_bits),
             lambda: no_decision)
         stuck = episodes.stuck_events > stuck_before
         episodes, rec = jax.vmap(partial(execute, env))(episodes, decide, decision, stuck)

@@ -17,10 +17,11 @@ import numpy as np
 from flax import struct
 
 from envs_jax import env_class
+from jaxbridge.approaches import Approach, get_approach
 from jaxbridge.config import TrainConfig
 from jaxbridge.dqn import Learner, epsilon, init_learner, learn
 from jaxbridge.meta_policy import rollout
-from jaxbridge.q_bridge import QBridgeParams, QNetwork, make_q_bridge
+from jaxbridge.q_bridge import QBridgeParams, QNetwork
 from jaxbridge.replay import add
 from jaxbridge.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.transitions import episode_transitions
@@ -47,6 +48,7 @@ class Experiment:
     """The static side of a run: config, tasks of every seed, the network and the bridge."""
 
     config: TrainConfig
+    approach: Approach
     train: TaskBatch  # seed-major: episodes_per_cycle copies of each seed's training task
     test: TaskBatch  # seed-major: each seed's test tasks
     net: QNetwork
@@ -66,8 +68,9 @@ def build_experiment(config: TrainConfig) -> Experiment:
     train = make_batch(env_cls, train_specs, train_owner, horizons=[config.train_steps] * len(train_specs))
     test = evaluation_batch(env_cls, seeds, config.num_test_tasks)
     net = QNetwork(config.hidden_sizes)
-    return Experiment(config, train, test, net, make_q_bridge(train.env, net, config.n_sample),
-                      make_q_bridge(test.env, net, config.n_sample))
+    approach = get_approach(config.approach)
+    return Experiment(config, approach, train, test, net, approach.make_bridge(train.env, net, config.n_sample),
+                      approach.make_bridge(test.env, net, config.n_sample))
 
 
 def init_learners(experiment: Experiment) -> Learner:
@@ -84,6 +87,7 @@ def episode_params(learners: Learner, owner: np.ndarray, eps: jax.Array) -> QBri
 
 def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, CycleMetrics]]:
     config, train, test = experiment.config, experiment.train, experiment.test
+    approach, controls = experiment.approach, experiment.approach.controls
     seeds, episodes, num_tests = config.num_seeds, config.episodes_per_cycle, config.num_test_tasks
     train_owner = np.repeat(np.arange(seeds), episodes)
     test_owner = np.repeat(np.arange(seeds), num_tests)
@@ -99,25 +103,31 @@ def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, Cyc
         explore = episode_params(learners, train_owner, eps[train_owner])
         episode_keys = jax.vmap(lambda k: jax.random.split(k, episodes))(k_train).reshape(-1)
         result, records = rollout(train.env, experiment.train_bridge, explore, train_tasks, train_tables,
-                                  train_horizons, episode_keys, config.train_steps, record=True)
-
-        # 2. One transition per bridge decision into each seed's replay buffer.
-        transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
-            records, result.success, call_planner, config.call_planner_bonus)
-        by_seed = lambda x: x.reshape((seeds, -1) + x.shape[2:])
-        buffers = jax.vmap(add)(learners.buffer, jax.tree.map(by_seed, transitions), by_seed(valid))
+                                  train_horizons, episode_keys, config.train_steps, record=approach.learns,
+                                  controls=controls)
         decisions = result.bridge_decisions.reshape(seeds, episodes).sum(1)
-        learners = learners.replace(buffer=buffers, decisions=learners.decisions + decisions, key=k_learn)
 
-        # 3. Double-DQN updates, every seed its own.
-        learners, loss, q_abs_max = jax.vmap(partial(learn, train.env, config))(learners, decisions)
+        if approach.learns:
+            # 2. One transition per bridge decision into each seed's replay buffer.
+            transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
+                records, result.success, call_planner, config.call_planner_bonus)
+            by_seed = lambda x: x.reshape((seeds, -1) + x.shape[2:])
+            buffers = jax.vmap(add)(learners.buffer, jax.tree.map(by_seed, transitions), by_seed(valid))
+            learners = learners.replace(buffer=buffers, decisions=learners.decisions + decisions, key=k_learn)
+
+            # 3. Double-DQN updates, every seed its own.
+            learners, loss, q_abs_max = jax.vmap(partial(learn, train.env, config))(learners, decisions)
+        else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
+            learners = learners.replace(decisions=learners.decisions + decisions)
+            eps = jnp.full_like(eps, 1.0 if approach.bridge == "random" else 0.0)
+            loss = q_abs_max = jnp.zeros(seeds, jnp.float32)
         learners = learners.replace(key=k_next)
 
         # 4. Greedy evaluation on every seed's test tasks.
         greedy = episode_params(learners, test_owner, jnp.zeros(len(test_owner), jnp.float32))
         test_keys = jax.vmap(lambda k: jax.random.split(k, num_tests))(k_test).reshape(-1)
         tested, _ = rollout(test.env, experiment.test_bridge, greedy, test_tasks, test_tables, test_horizons,
-                            test_keys, test.max_steps)
+                            test_keys, test.max_steps, controls=controls)
 
         per_seed = lambda x, n: x.reshape(seeds, n)
         metrics = CycleMetrics(

@@ -56,8 +56,9 @@ class QNetwork(nn.Module):
         return UniformDense(1, scale=0.0)(x)[..., 0]
 
 
-def input_size(env: NoveltyEnv) -> int:
-    return env.num_features + env.num_skills + 1 + 1
+def input_size(env: NoveltyEnv, num_features: int) -> int:
+    """Observation ++ one-hot over the skills and CallPlanner ++ one parameter."""
+    return num_features + env.num_skills + 1 + 1
 
 
 def encode(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Array) -> jax.Array:

@@ -13,7 +13,8 @@ import jax
 import numpy as np
 from tqdm import tqdm
 
-from jaxbridge import artifacts, checkpoint
+from jaxbridge import artifacts, checkpoint, comparison
+from jaxbridge.approaches import get_approach
 from jaxbridge.config import TrainConfig
 from jaxbridge.online import CycleMetrics, Experiment, build_experiment, init_learners, make_cycle
 
@@ -76,10 +77,10 @@ def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int)
 
 
 def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: bool = False,
-          fault_injection: Callable | None = None) -> dict:
+          fault_injection: Callable | None = None, bar: tqdm | None = None) -> dict:
     """Run the cycles of `config` (continuing the latest checkpoint with `resume`), writing the run
     files and checkpoints into `run_dir`. `fault_injection(cycle, learners) -> learners` lets tests
-    corrupt the state before a cycle."""
+    corrupt the state before a cycle. `bar`: a progress bar shared with other runs (else its own)."""
     start = time.perf_counter()
     experiment = build_experiment(config)
     learners = init_learners(experiment)
@@ -102,8 +103,12 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
     # (learners, history) after the last completed cycle, replaced in one assignment so that Ctrl-C at
     # any point finds a consistent pair to checkpoint.
     done = (learners, history)
-    bar = tqdm(total=config.cycles, initial=len(history), desc=f"{config.env} x{config.num_seeds} seeds",
-               unit="cycle", disable=not progress, dynamic_ncols=True)
+    own_bar = bar is None
+    if own_bar:
+        bar = tqdm(total=config.cycles, initial=len(history), desc=f"{config.env} x{config.num_seeds} seeds",
+                   unit="cycle", disable=not progress, dynamic_ncols=True)
+    else:
+        bar.update(len(history))
     try:
         for c in range(len(history) + 1, config.cycles + 1):
             learners = done[0] if fault_injection is None else fault_injection(c, done[0])
@@ -123,9 +128,11 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
             save(*done)
         raise Interrupted(len(done[1])) from None
     finally:
-        bar.close()
+        if own_bar:
+            bar.close()
         if done[1]:  # the files always describe the cycles completed so far
-            artifacts.write_run_files(run_dir, config.to_dict(), done[1], config.seeds, elapsed())
+            artifacts.write_run_files(run_dir, config.to_dict(), done[1], config.seeds, elapsed(),
+                                      label=get_approach(config.approach).label)
     return artifacts.summary(done[1], config.seeds, elapsed())
 
 
@@ -135,3 +142,47 @@ def load_learners(run_dir: Path) -> tuple[TrainConfig, Experiment, object, int]:
     experiment = build_experiment(config)
     learners, record, step = checkpoint.restore(run_dir / "checkpoints", init_learners(experiment))
     return config, experiment, learners, step
+
+
+EXPERIMENT_FILE = "experiment.json"
+
+
+def is_experiment_dir(path: Path) -> bool:
+    return (path / EXPERIMENT_FILE).is_file()
+
+
+def load_experiment(experiment_dir: Path) -> tuple[TrainConfig, list[str]]:
+    """The base config and approach list of a multi-approach experiment directory."""
+    try:
+        data = json.loads((experiment_dir / EXPERIMENT_FILE).read_text())
+        return TrainConfig.from_dict(data["config"]), list(data["approaches"])
+    except (OSError, KeyError, TypeError, json.JSONDecodeError) as err:
+        raise ValueError(f"{experiment_dir / EXPERIMENT_FILE} is not a valid experiment file: {err}") from None
+
+
+def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
+                     resume: bool = False) -> dict[str, dict]:
+    """Train each approach in turn (one run directory each, under `experiment_dir`), with one progress
+    bar over all of them, then write the comparison files (figure, results.md, results.csv).
+    With `resume`, approaches already complete are kept, a started one continues from its checkpoint
+    and the others start. Returns each approach's summary."""
+    if not resume:
+        artifacts.write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
+            {"config": config.to_dict(), "approaches": approaches}, indent=2) + "\n")
+    bar = tqdm(total=config.cycles * len(approaches), unit="cycle", disable=not progress, dynamic_ncols=True)
+    summaries = {}
+    try:
+        for name in approaches:
+            run_dir = experiment_dir / name
+            bar.set_description(f"{config.env} x{config.num_seeds} seeds: {name}")
+            started = (run_dir / "checkpoints").is_dir() and checkpoint.sealed_steps(run_dir / "checkpoints")
+            if not started:
+                prepare_run_dir(run_dir, overwrite=True)
+            summaries[name] = train(dataclasses.replace(config, approach=name), run_dir, resume=bool(started),
+                                    bar=bar)
+    finally:
+        bar.close()
+        done = [a for a in approaches if (experiment_dir / a / "metrics.csv").is_file()]
+        if done:
+            comparison.write_comparison(experiment_dir, config.env, done)
+    return summaries

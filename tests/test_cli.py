@@ -18,13 +18,27 @@ def run(*args, cwd=ROOT):
 def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
     proc = run("train.py", "--num-seeds", "2", "--cycles", "3", "--updates-per-cycle", "10",
-               "--checkpoint-every", "2", "--out", str(out), "--name", "tiny", "--no-progress")
+               "--checkpoint-every", "2", "--out", str(out), "--name", "tiny", "--no-progress",
+               "--approaches", "ours,pure_planning")
     assert proc.returncode == 0, proc.stderr
     return out / "tiny", proc
 
 
+def test_train_writes_the_experiment_directory(short_run):
+    experiment_dir, proc = short_run
+    assert json.loads((experiment_dir / "experiment.json").read_text())["approaches"] == ["ours", "pure_planning"]
+    results = list(csv.DictReader((experiment_dir / "results.csv").open()))
+    assert [r["approach"] for r in results] == ["ours", "pure_planning"]
+    assert all(r["seeds"] == "2" and r["cycles"] == "3" for r in results)
+    assert float(results[1]["test_smooth_reward_final"]) == 0.0  # pure planning never passes a door
+    table = (experiment_dir / "results.md").read_text()
+    assert "| ours | 2 |" in table and "| pure planning | 2 |" in table
+    assert (experiment_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "pure_planning" in proc.stdout and "ours" in proc.stdout
+
+
 def test_train_writes_the_run_directory(short_run):
-    run_dir, proc = short_run
+    run_dir, proc = short_run[0] / "ours", short_run[1]
     rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
     assert len(rows) == 2 * 3 and {r["seed"] for r in rows} == {"0", "1"}
     assert {r["cycle"] for r in rows} == {"1", "2", "3"}
@@ -32,14 +46,14 @@ def test_train_writes_the_run_directory(short_run):
     summary = json.loads((run_dir / "summary.json").read_text())
     assert summary["cycles"] == 3 and summary["seeds"] == [0, 1]
     config = json.loads((run_dir / "config.json").read_text())
-    assert config["config_version"] == 1 and config["num_seeds"] == 2
+    assert config["config_version"] == 2 and config["num_seeds"] == 2 and config["approach"] == "ours"
     assert (run_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in (run_dir / "checkpoints").iterdir() if p.name.isdigit()) == ["2", "3"]
     assert "done in" in proc.stdout
 
 
 def test_eval_loads_the_checkpoint(short_run):
-    run_dir, _ = short_run
+    run_dir = short_run[0]  # the experiment directory: eval.py picks its "ours" run
     proc = run("eval.py", str(run_dir), "--num-tasks", "3")
     assert proc.returncode == 0, proc.stderr
     assert "checkpoint of cycle 3" in proc.stdout and "20 cells, 3 doors" not in proc.stdout
@@ -51,7 +65,7 @@ def test_eval_loads_the_checkpoint(short_run):
 
 
 def test_an_existing_run_is_not_overwritten(short_run):
-    run_dir, _ = short_run
+    run_dir = short_run[0]
     proc = run("train.py", "--cycles", "1", "--out", str(run_dir.parent), "--name", "tiny", "--no-progress")
     assert proc.returncode == 2 and "already exists" in proc.stderr and "Traceback" not in proc.stderr
 
@@ -60,6 +74,8 @@ def test_an_existing_run_is_not_overwritten(short_run):
     (["train.py", "--env", "nowhere"], "invalid choice"),
     (["train.py", "--num-seeds", "0"], "positive integer"),
     (["train.py", "--cycles", "-3"], "positive integer"),
+    (["train.py", "--approaches", "ours,clever"], "unknown approach clever"),
+    (["train.py", "--approaches", "ours,ours"], "listed twice"),
     (["eval.py", "--bridge", "clever"], "invalid choice"),
     (["eval.py", "/nonexistent/run"], "not a run directory"),
     (["eval.py", "--num-seeds", "x"], "positive integer"),

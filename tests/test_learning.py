@@ -35,7 +35,7 @@ def test_epsilon_anneals_linearly_per_decision_to_its_floor():
 def test_double_dqn_target_on_a_hand_built_batch():
     cfg = TrainConfig()
     net = QNetwork(cfg.hidden_sizes)
-    x0 = jnp.zeros((1, input_size(ENV)))
+    x0 = jnp.zeros((1, input_size(ENV, ENV.num_features)))
     # Random output layers (the default starts them at 0) so that the two nets disagree.
     def random_net(key):
         params = net.init(key, x0)

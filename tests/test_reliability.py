@@ -20,7 +20,8 @@ from jaxbridge.online import build_experiment, init_learners
 from jaxbridge.runner import NumericalFault, prepare_run_dir, train
 
 ROOT = Path(__file__).resolve().parents[1]
-SMALL = ["--num-seeds", "2", "--cycles", "6", "--updates-per-cycle", "50", "--checkpoint-every", "1", "--no-progress"]
+SMALL = ["--num-seeds", "2", "--cycles", "6", "--updates-per-cycle", "50", "--checkpoint-every", "1", "--no-progress",
+         "--approaches", "ours"]
 
 
 def cli(*args):
@@ -38,11 +39,11 @@ def uninterrupted(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
     proc = cli("train.py", *SMALL, "--out", str(out), "--name", "whole")
     assert proc.returncode == 0, proc.stderr
-    return out / "whole"
+    return out / "whole" / "ours"
 
 
 def test_a_run_killed_mid_training_resumes_to_identical_metrics_and_parameters(uninterrupted, tmp_path):
-    run_dir = tmp_path / "killed"
+    run_dir = tmp_path / "killed" / "ours"
     proc = subprocess.Popen([sys.executable, "train.py", *SMALL, "--out", str(tmp_path), "--name", "killed"],
                             cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 300
@@ -51,7 +52,7 @@ def test_a_run_killed_mid_training_resumes_to_identical_metrics_and_parameters(u
         time.sleep(0.05)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
-    resumed = cli("train.py", "--resume", str(run_dir), "--no-progress")
+    resumed = cli("train.py", "--resume", str(run_dir.parent), "--no-progress")  # the experiment directory
     assert resumed.returncode == 0, resumed.stderr
     assert (run_dir / "metrics.csv").read_text() == (uninterrupted / "metrics.csv").read_text()
     step_a, params_a = final_params(uninterrupted)
@@ -110,7 +111,7 @@ def test_a_checkpoint_of_another_config_version_is_refused(uninterrupted, tmp_pa
 @pytest.mark.parametrize("args,message", [
     (["train.py", "--resume", "/nonexistent/run"], "not a run directory"),
     (["train.py", "--resume", "runs", "--cycles", "3"], "drop --cycles"),
-    (["train.py", "--out", "/proc/no/such/place", "--cycles", "1"], "cannot write run directory"),
+    (["train.py", "--out", "/proc/no/such/place", "--cycles", "1"], "cannot write experiment directory"),
     (["train.py", "--episodes-per-cycle", "400"], "must fit the replay buffer"),
     (["eval.py", "--help-me"], "unrecognized arguments"),
 ])
@@ -120,8 +121,9 @@ def test_more_bad_input(args, message):
 
 
 def test_ctrl_c_saves_a_checkpoint_of_the_last_completed_cycle(uninterrupted, tmp_path):
-    run_dir = tmp_path / "interrupted"
-    args = ["--num-seeds", "2", "--cycles", "30", "--updates-per-cycle", "50", "--checkpoint-every", "100"]
+    run_dir = tmp_path / "interrupted" / "ours"
+    args = ["--num-seeds", "2", "--cycles", "30", "--updates-per-cycle", "50", "--checkpoint-every", "100",
+            "--approaches", "ours"]
     proc = subprocess.Popen([sys.executable, "train.py", *args, "--out", str(tmp_path), "--name", "interrupted"],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     seen = b""

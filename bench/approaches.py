@@ -1,0 +1,56 @@
+"""Wall-clock of the paper's figure: every approach, 8 seeds x 100 cycles, through the real code path
+(`train.py`'s driver, run files and checkpoints included), into a temporary directory.
+
+    python -m bench.approaches [--env light_switch_door] [--num-seeds 8] [--cycles 100] [--approaches all]
+
+Prints each approach's time and final numbers, the total, and the ratio to the authors' compute for the
+same figure (results.md: on the order of 100 CPU-hours for 6 approaches x 8 seeds).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import jax
+
+from jaxbridge.approaches import APPROACHES
+from jaxbridge.config import TrainConfig
+from jaxbridge.runner import train_approaches
+
+AUTHORS_SEED_RUN_S = 17_572  # one seed, one approach, 100 cycles, Light Switch Door "ours" (results.md)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
+    parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
+    parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
+    parser.add_argument("--approaches", default="all", help="comma-separated approaches or all (default: all)")
+    parser.add_argument("--keep", type=Path, default=None, help="write the experiment here instead of a temp dir")
+    args = parser.parse_args()
+    names = list(APPROACHES) if args.approaches == "all" else args.approaches.split(",")
+    config = TrainConfig(env=args.env, num_seeds=args.num_seeds, cycles=args.cycles)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = args.keep or Path(tmp) / args.env
+        out.mkdir(parents=True, exist_ok=True)
+        start = time.perf_counter()
+        summaries = train_approaches(config, names, out, progress=False)
+        total = time.perf_counter() - start
+        results = (out / "results.md").read_text()
+    print(f"jax {jax.__version__}, devices: {jax.devices()}")
+    print(f"{args.env}: {len(names)} approaches x {args.num_seeds} seeds x {args.cycles} cycles")
+    for name, info in summaries.items():
+        print(f"  {name:>20}: {info['elapsed_s']:7.1f} s   smooth test reward {info['smooth_reward_final']['mean']:.3f}")
+    seed_runs = len(names) * args.num_seeds
+    print(f"total: {total:.1f} s ({total / 60:.1f} min) for {seed_runs} seed-runs; "
+          f"authors: ~{AUTHORS_SEED_RUN_S * seed_runs / 3600:,.0f} CPU-hours at {AUTHORS_SEED_RUN_S:,} s per seed-run "
+          f"-> {AUTHORS_SEED_RUN_S * seed_runs / total:,.0f}x")
+    print(results)
+    print(json.dumps({"total_s": round(total, 1), "per_approach_s": {k: v["elapsed_s"] for k, v in summaries.items()}}))
+
+
+if __name__ == "__main__":
+    main()

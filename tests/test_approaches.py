@@ -1,0 +1,147 @@
+"""Each baseline and ablation differs from our method exactly by its defining difference
+(reference/method.md §6), checked on the rollouts it produces and on the program it compiles to."""
+from collections import Counter
+from dataclasses import replace
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from envs_jax.light_switch_door import LightSwitchDoor
+from jaxbridge.approaches import APPROACHES, get_approach
+from jaxbridge.bridges import random_bridge
+from jaxbridge.config import TrainConfig
+from jaxbridge.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, rollout
+from jaxbridge.online import build_experiment, init_learners, make_cycle
+from jaxbridge.tasks import evaluation_batch
+
+TINY = TrainConfig(num_seeds=1, episodes_per_cycle=2, num_test_tasks=2, updates_per_cycle=2, buffer_capacity=512)
+
+
+@pytest.fixture(scope="module")
+def tests_batch():
+    return evaluation_batch(LightSwitchDoor, [0, 1, 2], 4)
+
+
+def random_rollout(batch, controls, seed=0):
+    """The random bridge picks CallPlanner whenever it is applicable, so it shows what `controls` allow."""
+    keys = jax.random.split(jax.random.key(seed), batch.size)
+    result, records = rollout(batch.env, random_bridge(batch.env), None, batch.tasks, batch.tables, batch.horizons,
+                              keys, batch.max_steps, record=True, controls=controls)
+    return jax.tree.map(np.asarray, result), jax.tree.map(np.asarray, records)
+
+
+def primitives(closed_jaxpr) -> Counter:
+    """Every primitive in a traced program, nested jaxprs (jit, scan, cond branches) included."""
+    counts = Counter()
+
+    def walk(jaxpr):
+        for eqn in jaxpr.eqns:
+            counts[eqn.primitive.name] += 1
+            for value in eqn.params.values():
+                for sub in value if isinstance(value, (list, tuple)) else [value]:
+                    if hasattr(sub, "eqns"):
+                        walk(sub)
+                    elif hasattr(sub, "jaxpr") and hasattr(sub.jaxpr, "eqns"):
+                        walk(sub.jaxpr)
+
+    walk(closed_jaxpr.jaxpr)
+    return counts
+
+
+def cycle_program(approach: str) -> Counter:
+    experiment = build_experiment(replace(TINY, approach=approach))
+    return primitives(jax.make_jaxpr(make_cycle(experiment))(init_learners(experiment)))
+
+
+def test_every_approach_is_registered_with_its_parts():
+    assert list(APPROACHES) == ["ours", "no_feature_selection", "no_callplanner", "random", "pure_planning", "maple_q"]
+    assert [a.learns for a in APPROACHES.values()] == [True, True, True, False, False, True]
+    with pytest.raises(ValueError, match="unknown approach"):
+        get_approach("clever")
+
+
+def test_no_callplanner_never_hands_control_back(tests_batch):
+    result, records = random_rollout(tests_batch, get_approach("no_callplanner").controls)
+    live_decisions = records.decided & records.live
+    assert live_decisions.any()
+    assert not (records.actor == ACTOR_CALL_PLANNER).any()
+    assert (records.num_ground[..., -1][live_decisions] == 0).all()  # CallPlanner never offered
+    assert (result.planner_calls == 1).all() and (result.stuck_events <= 1).all()
+    # After the first stuck state the planner never acts again.
+    first_bridge = np.argmax(records.actor == ACTOR_BRIDGE, axis=0)
+    for episode in np.nonzero((records.actor == ACTOR_BRIDGE).any(0))[0]:
+        after = records.actor[first_bridge[episode]:, episode][records.live[first_bridge[episode]:, episode]]
+        assert (after == ACTOR_BRIDGE).all()
+    # The same bridge under our method's controls does hand back, so the check above can fail.
+    _, ours = random_rollout(tests_batch, Controls())
+    assert (ours.actor == ACTOR_CALL_PLANNER).any()
+
+
+def test_maple_q_never_plans(tests_batch):
+    result, records = random_rollout(tests_batch, get_approach("maple_q").controls)
+    live = records.live
+    assert not np.isin(records.actor[live], [ACTOR_PLANNER, ACTOR_CALL_PLANNER]).any()
+    assert (records.decided & live)[0].all()  # the bridge acts from the very first step
+    assert (result.planner_calls == 0).all() and (result.table_misses == 0).all()
+    assert records.features.shape[-1] == LightSwitchDoor.full_state_size
+    # The host planner is not even part of Maple Q's program; it is part of ours.
+    assert cycle_program("maple_q")["pure_callback"] == 0
+    assert cycle_program("ours")["pure_callback"] > 0
+
+
+@pytest.mark.parametrize("approach", ["pure_planning", "random"])
+def test_non_learning_approaches_never_evaluate_a_q_network(approach):
+    # The only matrix products in a cycle are the Q-network's (the envs' dynamics have none).
+    assert cycle_program(approach)["dot_general"] == 0
+    assert cycle_program("ours")["dot_general"] > 0
+
+
+def test_pure_planning_replans_whenever_stuck_and_solves_nothing(tests_batch):
+    from jaxbridge.bridges import pure_planning_bridge
+    keys = jax.random.split(jax.random.key(0), tests_batch.size)
+    result, records = rollout(tests_batch.env, pure_planning_bridge(tests_batch.env), None, tests_batch.tasks,
+                              tests_batch.tables, tests_batch.horizons, keys, tests_batch.max_steps, record=True)
+    result, records = jax.tree.map(np.asarray, (result, records))
+    assert not result.success.any()
+    decided = records.decided & records.live
+    assert (records.skill[decided] == tests_batch.env.num_skills).all()  # every decision is a re-plan
+    assert (result.planner_calls == 1 + result.bridge_decisions).all() and (result.planner_calls > 2).all()
+
+
+def test_no_feature_selection_sees_the_padded_full_state(tests_batch):
+    approach = get_approach("no_feature_selection")
+    experiment = build_experiment(replace(TINY, approach=approach.name))
+    kernel = init_learners(experiment).params["params"]["UniformDense_0"]["kernel"]
+    env = experiment.env
+    assert kernel.shape[1] == LightSwitchDoor.full_state_size + env.num_skills + 1 + 1  # [seeds, inputs, 32]
+    ours = init_learners(build_experiment(TINY)).params["params"]["UniformDense_0"]["kernel"]
+    assert ours.shape[1] == LightSwitchDoor.num_features + env.num_skills + 1 + 1
+
+    # The full state is the same size for the 5-cell training env and the 20-cell test env, and it
+    # carries what the object-centric features leave out (robot position, light, every door).
+    train_env = experiment.train.env
+    assert train_env.max_cells < env.max_cells
+    task = jax.tree.map(lambda x: x[0], tests_batch.tasks)
+    state = tests_batch.env.reset(task)
+    full = tests_batch.env.full_state(state)
+    assert full.shape == (LightSwitchDoor.full_state_size,)
+    moved = tests_batch.env.full_state(state.replace(robot_x=jnp.float32(3.5), move_key=state.move_key.at[1].set(0.4)))
+    changed = np.nonzero(np.asarray(moved != full))[0]
+    first_door = 1 + 3 + LightSwitchDoor.max_task_cells
+    assert changed.tolist() == [0, first_door + 5 + 1]  # robot x; door 1's move key
+    with pytest.raises(ValueError, match="at most 20 cells"):
+        LightSwitchDoor(max_cells=25).full_state(LightSwitchDoor(max_cells=25).reset(
+            LightSwitchDoor(max_cells=25).task_arrays(LightSwitchDoor.test_tasks(0, 1)[0])))
+
+
+def test_random_and_pure_planning_leave_the_network_untouched():
+    for name in ("random", "pure_planning"):
+        experiment = build_experiment(replace(TINY, approach=name))
+        learners = init_learners(experiment)
+        after, metrics = make_cycle(experiment)(learners)
+        assert all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(learners.params),
+                                                        jax.tree.leaves(after.params)))
+        assert float(metrics.loss[0]) == 0.0 and int(metrics.buffer_size[0]) == 0
+        assert float(metrics.epsilon[0]) == (1.0 if name == "random" else 0.0)
