@@ -1,8 +1,9 @@
 """Pure-functional JAX environments with novelties, and their planner models."""
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, SkillCall, SkillSpec
+from envs_jax.doorknobs import Doorknobs
 from envs_jax.light_switch_door import LightSwitchDoor
 
-ENVS = {LightSwitchDoor.name: LightSwitchDoor}
+ENVS = {LightSwitchDoor.name: LightSwitchDoor, Doorknobs.name: Doorknobs}
 
 
 def env_class(name: str) -> type[NoveltyEnv]:
@@ -11,4 +12,4 @@ def env_class(name: str) -> type[NoveltyEnv]:
         raise ValueError(f"unknown env {name!r}; choose from {', '.join(sorted(ENVS))}")
     return ENVS[name]
 
-__all__ = ['BridgeAction', 'BridgeObs', 'NoveltyEnv', 'SkillCall', 'SkillSpec', 'LightSwitchDoor', 'ENVS', 'env_class']
+__all__ = ['BridgeAction', 'BridgeObs', 'NoveltyEnv', 'SkillCall', 'SkillSpec', 'LightSwitchDoor', 'Doorknobs', 'ENVS', 'env_class']
