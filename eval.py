@@ -4,6 +4,7 @@
     python eval.py runs/light_switch_door --approach no_callplanner   # ... of another approach
     python eval.py runs/light_switch_door --cells 40 --doors 8   # ... on larger tasks
     python eval.py --env light_switch_door --bridge oracle --num-seeds 8   # a hand-made bridge
+    python eval.py --env doorknobs --bridge oracle --render episode.png      # ... and draw an episode
 """
 from __future__ import annotations
 
@@ -13,10 +14,13 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from envs_jax import ENVS
 from jaxbridge.approaches import APPROACHES
 from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
 
+BRIDGE_LABELS = {"oracle": "oracle bridge", "random": "random bridge", "none": "pure planning"}
 BRIDGE_HELP = ("oracle: the env's hand-written novelty fixer; random: a uniformly random applicable "
                "action whenever stuck; none: pure planning (re-plan whenever stuck)")
 
@@ -43,7 +47,62 @@ def parse_args(argv):
                         help="test tasks per seed (default: %(default)s, as in the paper)")
     parser.add_argument("--rollout-seed", type=non_negative_int, default=0,
                         help="seed of the rollout's randomness (random bridge, skill parameters) (default: %(default)s)")
+    parser.add_argument("--render", type=Path, default=None, metavar="PATH.png",
+                        help="also draw one evaluated episode to this PNG: the world, the robot's path coloured by "
+                             "who was in control (planner, bridge, CallPlanner) and the doors the bridge opened")
+    parser.add_argument("--render-task", type=non_negative_int, default=None, metavar="K",
+                        help="with --render: which episode, an index into all evaluated tasks, seed after seed "
+                             "(with 10 tasks per seed, K = 23 is the third seed's task 3); default: the solved task "
+                             "of the first seed on which the bridge opened the most doors (the first of those; "
+                             "task 0 if none is solved)")
     return parser.parse_args(argv)
+
+
+def check_render_args(args) -> None:
+    if args.render_task is not None and args.render is None:
+        raise UsageError("--render-task picks the episode that --render draws; give --render PATH.png too")
+    if args.render is None:
+        return
+    if args.render.suffix.lower() != ".png":
+        raise UsageError(f"--render writes a PNG image: give a path ending in .png, got {args.render}")
+    if not args.render.parent.is_dir():
+        raise UsageError(f"--render: directory {args.render.parent} does not exist")
+
+
+def check_render_task(args, num_tasks: int) -> None:
+    if args.render_task is not None and args.render_task >= num_tasks:
+        raise UsageError(f"--render-task must be below {num_tasks}, the number of evaluated tasks, "
+                         f"got {args.render_task}")
+
+
+def render(args, batch, bridge, bridge_params, controls, result, label: str) -> None:
+    """Re-run the chosen evaluated episode with recording on and draw it to args.render."""
+    from jaxbridge.artifacts import write_atomic
+    from jaxbridge.render import pick_episode, render_episode, trace_episodes
+
+    chosen = [args.render_task] if args.render_task is not None else np.flatnonzero(batch.seeds == batch.seeds[0])
+    traces = trace_episodes(batch, bridge, bridge_params, chosen, args.rollout_seed, controls, expected=result)
+    trace = traces[0] if args.render_task is not None else pick_episode(traces)
+    try:
+        write_atomic(args.render, render_episode(batch.env, trace, label))
+    except OSError as err:
+        raise UsageError(f"cannot write {args.render}: {err.strerror or err}") from None
+    opened = int(trace.opened_by_bridge.sum())
+    print(f"drew seed {trace.seed}, task {trace.task} ({'solved' if trace.success else 'not solved'} in "
+          f"{trace.steps} steps, the bridge opened {opened} door{'s' if opened != 1 else ''}) to {args.render}")
+
+
+def greedy_bridge(run_dir: Path, batch):
+    """The run's greedy bridge, its per-episode params for `batch` and its controls, as evaluate_run uses
+    them (it does not return them, so the checkpoint is read a second time)."""
+    from jaxbridge.online import episode_params
+    from jaxbridge.runner import load_learners
+
+    config, experiment, learners, _ = load_learners(run_dir)
+    owner = np.searchsorted(np.asarray(config.seeds), batch.seeds)
+    approach = experiment.approach
+    return (approach.make_bridge(batch.env, experiment.net, config.n_sample),
+            episode_params(learners, owner, np.zeros(len(owner), np.float32)), approach.controls)
 
 
 def run_directory(path: Path, approach: str | None) -> Path:
@@ -91,27 +150,37 @@ def evaluate_checkpoint(args) -> int:
     print(f"{args.run}: {config.env}, {config.approach}, checkpoint of cycle {step}, greedy bridge, {what} "
           f"({time.perf_counter() - start:.1f} s including compilation)")
     print(format_table(summarise(batch, result)))
+    if args.render is not None:
+        check_render_task(args, batch.size)
+        render(args, batch, *greedy_bridge(args.run, batch), result,
+               f"greedy bridge of {config.approach}, cycle {step}")
     return 0
 
 
 def main(argv=None) -> int:
     args = parse_args(argv)
+    check_render_args(args)
     if args.approach is not None and args.run is None:
         raise UsageError("--approach needs an experiment directory to pick the run from")
     if args.run is not None:
         return evaluate_checkpoint(args)
     from jaxbridge.bridges import make_bridge
     from jaxbridge.evaluate import format_table, run_bridge, summarise
+    from jaxbridge.meta_policy import Controls
     from jaxbridge.tasks import evaluation_batch
 
     env_cls = ENVS[args.env]
     seeds = list(range(args.first_seed, args.first_seed + args.num_seeds))
     start = time.perf_counter()
     batch = evaluation_batch(env_cls, seeds, args.num_tasks)
-    result = run_bridge(batch, make_bridge(args.bridge, batch.env), seed=args.rollout_seed)
+    check_render_task(args, batch.size)
+    bridge = make_bridge(args.bridge, batch.env)
+    result = run_bridge(batch, bridge, seed=args.rollout_seed)
     print(f"{args.env}, bridge = {args.bridge}, {batch.size} test tasks "
           f"({time.perf_counter() - start:.1f} s including compilation)")
     print(format_table(summarise(batch, result)))
+    if args.render is not None:
+        render(args, batch, bridge, None, Controls(), result, BRIDGE_LABELS[args.bridge])
     return 0
 
 
