@@ -74,6 +74,9 @@ def parse_args(argv):
     p.add_argument("--resume", type=Path, metavar="DIR", default=None,
                    help="continue the experiment (or single approach's run) in DIR from its latest checkpoints, "
                         "with its saved config")
+    p.add_argument("--workers", type=positive_int, default=None,
+                   help="approaches trained at the same time, in threads (default: one per CPU core, at most one "
+                        "per approach); results do not depend on it")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
     return p.parse_args(argv)
 
@@ -99,8 +102,8 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     import time
     from jaxbridge.checkpoint import CheckpointError
-    from jaxbridge.runner import (Interrupted, NumericalFault, is_experiment_dir, load_config, load_experiment,
-                                  prepare_run_dir, train, train_approaches)
+    from jaxbridge.experiments import is_experiment_dir, load_experiment, train_approaches
+    from jaxbridge.runner import Interrupted, NumericalFault, load_config, prepare_run_dir, train
 
     start = time.perf_counter()
     progress = not args.no_progress
@@ -114,7 +117,8 @@ def main(argv=None) -> int:
         try:
             if is_experiment_dir(out_dir):
                 config, approaches = load_experiment(out_dir)
-                run = lambda: train_approaches(config, approaches, out_dir, progress, resume=True)
+                run = lambda: train_approaches(config, approaches, out_dir, progress, resume=True,
+                                               workers=args.workers)
             else:  # one approach's run directory
                 config = load_config(out_dir)
                 run = lambda: {config.approach: train(config, out_dir, progress, resume=True)}
@@ -130,7 +134,7 @@ def main(argv=None) -> int:
             raise UsageError(str(err)) from None
         except OSError as err:
             raise UsageError(f"cannot write experiment directory {out_dir}: {err.strerror}") from None
-        run = lambda: train_approaches(config, approaches, out_dir, progress)
+        run = lambda: train_approaches(config, approaches, out_dir, progress, workers=args.workers)
     try:
         summaries = run()
     except CheckpointError as err:

@@ -18,7 +18,7 @@ import jax
 
 from jaxbridge.approaches import APPROACHES
 from jaxbridge.config import TrainConfig
-from jaxbridge.runner import train_approaches
+from jaxbridge.experiments import default_workers, train_approaches
 
 AUTHORS_SEED_RUN_S = 17_572  # one seed, one approach, 100 cycles, Light Switch Door "ours" (results.md)
 
@@ -29,6 +29,7 @@ def main() -> None:
     parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
     parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
     parser.add_argument("--approaches", default="all", help="comma-separated approaches or all (default: all)")
+    parser.add_argument("--workers", type=int, default=None, help="approaches at a time (default: one per core)")
     parser.add_argument("--keep", type=Path, default=None, help="write the experiment here instead of a temp dir")
     args = parser.parse_args()
     names = list(APPROACHES) if args.approaches == "all" else args.approaches.split(",")
@@ -37,11 +38,12 @@ def main() -> None:
         out = args.keep or Path(tmp) / args.env
         out.mkdir(parents=True, exist_ok=True)
         start = time.perf_counter()
-        summaries = train_approaches(config, names, out, progress=False)
+        summaries = train_approaches(config, names, out, progress=False, workers=args.workers)
         total = time.perf_counter() - start
         results = (out / "results.md").read_text()
     print(f"jax {jax.__version__}, devices: {jax.devices()}")
-    print(f"{args.env}: {len(names)} approaches x {args.num_seeds} seeds x {args.cycles} cycles")
+    print(f"{args.env}: {len(names)} approaches x {args.num_seeds} seeds x {args.cycles} cycles, "
+          f"{args.workers or default_workers(names)} at a time")
     for name, info in summaries.items():
         print(f"  {name:>20}: {info['elapsed_s']:7.1f} s   smooth test reward {info['smooth_reward_final']['mean']:.3f}")
     seed_runs = len(names) * args.num_seeds

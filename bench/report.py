@@ -12,7 +12,7 @@ from pathlib import Path
 
 from jaxbridge.artifacts import REPORT_CYCLES
 from jaxbridge.comparison import write_comparison
-from jaxbridge.runner import is_experiment_dir, load_experiment
+from jaxbridge.experiments import is_experiment_dir, load_experiment
 
 # reference/results.md: test solve rate, mean [min, max] over the seeds with logs; smooth reward at 100.
 AUTHORS = {

@@ -20,6 +20,7 @@ class SeedSummary:
     planner_calls: float  # per task
     table_misses: int
     bridge_decisions: float  # per task
+    stuck_events: float  # per task: novelties met (the planner got stuck)
     task_size: str  # e.g. "11 cells, 3 doors"
 
 
@@ -41,22 +42,24 @@ def summarise(batch: TaskBatch, result: EpisodeResult) -> list[SeedSummary]:
             planner_calls=float(result.planner_calls[mine].mean()),
             table_misses=int(result.table_misses[mine].sum()),
             bridge_decisions=float(result.bridge_decisions[mine].mean()),
+            stuck_events=float(result.stuck_events[mine].mean()),
             task_size=batch.specs[int(np.argmax(mine))].describe()))
     return rows
 
 
 def format_table(rows: list[SeedSummary]) -> str:
     header = (f"{'seed':>4}  {'task size':<20} {'tasks':>5}  {'solve rate':>10}  {'mean steps':>10}  "
-              f"{'planner calls/task':>18}  {'bridge decisions/task':>21}  {'table misses':>12}")
+              f"{'planner calls/task':>18}  {'stuck/task':>10}  {'bridge decisions/task':>21}  {'table misses':>12}")
     lines = [header, "-" * len(header)]
     for r in rows:
         lines.append(f"{r.seed:>4}  {r.task_size:<20} {r.tasks:>5}  {r.solve_rate:>10.2f}  {r.mean_steps:>10.1f}  "
-                     f"{r.planner_calls:>18.1f}  {r.bridge_decisions:>21.1f}  {r.table_misses:>12d}")
+                     f"{r.planner_calls:>18.1f}  {r.stuck_events:>10.1f}  {r.bridge_decisions:>21.1f}  {r.table_misses:>12d}")
     n = sum(r.tasks for r in rows)
     mean = lambda f: sum(f(r) * r.tasks for r in rows) / n
     lines.append("-" * len(header))
     lines.append(f"{'all':>4}  {'':<20} {n:>5}  {mean(lambda r: r.solve_rate):>10.2f}  "
                  f"{mean(lambda r: r.mean_steps):>10.1f}  {mean(lambda r: r.planner_calls):>18.1f}  "
+                 f"{mean(lambda r: r.stuck_events):>10.1f}  "
                  f"{mean(lambda r: r.bridge_decisions):>21.1f}  {sum(r.table_misses for r in rows):>12d}")
     return "\n".join(lines)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import shutil
+import threading
 import time
 from pathlib import Path
 from typing import Callable
@@ -13,7 +14,7 @@ import jax
 import numpy as np
 from tqdm import tqdm
 
-from jaxbridge import artifacts, checkpoint, comparison
+from jaxbridge import artifacts, checkpoint
 from jaxbridge.approaches import get_approach
 from jaxbridge.config import TrainConfig
 from jaxbridge.online import CycleMetrics, Experiment, build_experiment, init_learners, make_cycle
@@ -22,8 +23,8 @@ from jaxbridge.online import CycleMetrics, Experiment, build_experiment, init_le
 class Interrupted(Exception):
     """Ctrl-C: the last completed cycle was checkpointed."""
 
-    def __init__(self, cycle: int):
-        super().__init__(f"interrupted after cycle {cycle}; checkpoint saved")
+    def __init__(self, cycle: int, message: str | None = None):
+        super().__init__(message or f"interrupted after cycle {cycle}; checkpoint saved")
         self.cycle = cycle
 
 
@@ -77,10 +78,12 @@ def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int)
 
 
 def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: bool = False,
-          fault_injection: Callable | None = None, bar: tqdm | None = None) -> dict:
+          fault_injection: Callable | None = None, bar: tqdm | None = None,
+          stop: threading.Event | None = None) -> dict:
     """Run the cycles of `config` (continuing the latest checkpoint with `resume`), writing the run
     files and checkpoints into `run_dir`. `fault_injection(cycle, learners) -> learners` lets tests
-    corrupt the state before a cycle. `bar`: a progress bar shared with other runs (else its own)."""
+    corrupt the state before a cycle. `bar`: a progress bar shared with other runs (else its own).
+    `stop`: when set (by another thread), checkpoint the last completed cycle and raise Interrupted."""
     start = time.perf_counter()
     experiment = build_experiment(config)
     learners = init_learners(experiment)
@@ -111,6 +114,8 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
         bar.update(len(history))
     try:
         for c in range(len(history) + 1, config.cycles + 1):
+            if stop is not None and stop.is_set():
+                raise KeyboardInterrupt
             learners = done[0] if fault_injection is None else fault_injection(c, done[0])
             updated, metrics = cycle(learners)
             metrics = jax.tree.map(np.asarray, metrics)
@@ -118,7 +123,8 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
             if message:
                 raise NumericalFault(message)
             done = (updated, [*done[1], metrics])
-            bar.set_postfix(test=f"{metrics.test_solve_rate.mean():.2f}",
+            shown = {} if own_bar else {"last": f"{config.approach} {c}"}
+            bar.set_postfix(**shown, test=f"{metrics.test_solve_rate.mean():.2f}",
                             train=f"{metrics.train_success_rate.mean():.2f}", eps=f"{metrics.epsilon.mean():.2f}")
             bar.update()
             if c % config.checkpoint_every == 0 or c == config.cycles:
@@ -143,46 +149,3 @@ def load_learners(run_dir: Path) -> tuple[TrainConfig, Experiment, object, int]:
     learners, record, step = checkpoint.restore(run_dir / "checkpoints", init_learners(experiment))
     return config, experiment, learners, step
 
-
-EXPERIMENT_FILE = "experiment.json"
-
-
-def is_experiment_dir(path: Path) -> bool:
-    return (path / EXPERIMENT_FILE).is_file()
-
-
-def load_experiment(experiment_dir: Path) -> tuple[TrainConfig, list[str]]:
-    """The base config and approach list of a multi-approach experiment directory."""
-    try:
-        data = json.loads((experiment_dir / EXPERIMENT_FILE).read_text())
-        return TrainConfig.from_dict(data["config"]), list(data["approaches"])
-    except (OSError, KeyError, TypeError, json.JSONDecodeError) as err:
-        raise ValueError(f"{experiment_dir / EXPERIMENT_FILE} is not a valid experiment file: {err}") from None
-
-
-def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
-                     resume: bool = False) -> dict[str, dict]:
-    """Train each approach in turn (one run directory each, under `experiment_dir`), with one progress
-    bar over all of them, then write the comparison files (figure, results.md, results.csv).
-    With `resume`, approaches already complete are kept, a started one continues from its checkpoint
-    and the others start. Returns each approach's summary."""
-    if not resume:
-        artifacts.write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
-            {"config": config.to_dict(), "approaches": approaches}, indent=2) + "\n")
-    bar = tqdm(total=config.cycles * len(approaches), unit="cycle", disable=not progress, dynamic_ncols=True)
-    summaries = {}
-    try:
-        for name in approaches:
-            run_dir = experiment_dir / name
-            bar.set_description(f"{config.env} x{config.num_seeds} seeds: {name}")
-            started = (run_dir / "checkpoints").is_dir() and checkpoint.sealed_steps(run_dir / "checkpoints")
-            if not started:
-                prepare_run_dir(run_dir, overwrite=True)
-            summaries[name] = train(dataclasses.replace(config, approach=name), run_dir, resume=bool(started),
-                                    bar=bar)
-    finally:
-        bar.close()
-        done = [a for a in approaches if (experiment_dir / a / "metrics.csv").is_file()]
-        if done:
-            comparison.write_comparison(experiment_dir, config.env, done)
-    return summaries
