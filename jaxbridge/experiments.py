@@ -22,8 +22,10 @@ from jaxbridge.config import TrainConfig
 from jaxbridge.runner import Interrupted, prepare_run_dir, train
 
 EXPERIMENT_FILE = "experiment.json"
-# Rough relative cost per approach, to start the longest first (measured on Light Switch Door).
-COST = {"no_feature_selection": 6, "maple_q": 5, "no_callplanner": 5, "ours": 4, "random": 1, "pure_planning": 1}
+# Seconds per approach in `python -m bench.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
+# longest start first, so the workers finish close together.
+COST = {"maple_q": 310, "no_feature_selection": 259, "no_callplanner": 204, "ours": 148, "random": 22,
+        "pure_planning": 17}
 
 
 def is_experiment_dir(path: Path) -> bool:
