@@ -65,7 +65,8 @@ def parse_args(argv):
     p.add_argument("--batch-size", type=positive_int,
                    help=f"minibatch size of the updates (default: {d.batch_size}; the paper: 64)")
     p.add_argument("--call-planner-bonus", type=float,
-                   help=f"extra reward when CallPlanner reaches the goal (the authors' code: 0.5; default: {d.call_planner_bonus})")
+                   help=f"extra reward when CallPlanner reaches the goal (the authors' code: 0.5; default: "
+                        f"{d.call_planner_bonus}, doorknobs 0.5; see docs/RESULTS.md)")
     p.add_argument("--checkpoint-every", type=positive_int,
                    help=f"save the learner state every N cycles and at the end (default: {d.checkpoint_every})")
     p.add_argument("--out", type=Path, default=Path("runs"), help="parent of run directories (default: %(default)s)")
@@ -83,7 +84,7 @@ def parse_args(argv):
 
 def make_config(args) -> TrainConfig:
     given = {field: getattr(args, flag) for flag, field in CONFIG_FLAGS.items() if getattr(args, flag) is not None}
-    config = TrainConfig(**given)
+    config = TrainConfig.for_env(given.pop("env", DEFAULTS.env), **given)
     if config.episodes_per_cycle * config.train_steps > config.buffer_capacity:
         raise UsageError(f"--episodes-per-cycle x {config.train_steps} steps must fit the replay buffer "
                          f"({config.buffer_capacity} transitions)")

@@ -33,7 +33,7 @@ def main() -> None:
     parser.add_argument("--keep", type=Path, default=None, help="write the experiment here instead of a temp dir")
     args = parser.parse_args()
     names = list(APPROACHES) if args.approaches == "all" else args.approaches.split(",")
-    config = TrainConfig(env=args.env, num_seeds=args.num_seeds, cycles=args.cycles)
+    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles)
     with tempfile.TemporaryDirectory() as tmp:
         out = args.keep or Path(tmp) / args.env
         out.mkdir(parents=True, exist_ok=True)

@@ -26,7 +26,7 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     args = parser.parse_args()
-    config = TrainConfig(env=args.env, num_seeds=args.num_seeds, cycles=args.cycles)
+    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles)
     start = time.perf_counter()
     experiment = build_experiment(config)
     learners = init_learners(experiment)

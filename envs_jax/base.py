@@ -86,6 +86,8 @@ class NoveltyEnv:
     action_dim: ClassVar[int]
     num_features: ClassVar[int]
     full_state_size: ClassVar[int]
+    # Training hyperparameters where this env departs from the paper-wide defaults (TrainConfig.for_env).
+    train_defaults: ClassVar[dict] = {}
 
     # ---- skills ---------------------------------------------------------------------------------
     @property

@@ -82,6 +82,13 @@ class TrainConfig:
             data["hidden_sizes"] = tuple(data["hidden_sizes"])
         return cls(**data)
 
+    @classmethod
+    def for_env(cls, env: str, **overrides) -> "TrainConfig":
+        """The config for `env`: the paper's defaults, then the env's own (`train_defaults` of its class,
+        each documented there), then `overrides`."""
+        from envs_jax import env_class
+        return cls(env=env, **{**env_class(env).train_defaults, **overrides})
+
     @property
     def seeds(self) -> list[int]:
         return list(range(self.first_seed, self.first_seed + self.num_seeds))

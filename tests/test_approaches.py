@@ -145,3 +145,12 @@ def test_random_and_pure_planning_leave_the_network_untouched():
                                                         jax.tree.leaves(after.params)))
         assert float(metrics.loss[0]) == 0.0 and int(metrics.buffer_size[0]) == 0
         assert float(metrics.epsilon[0]) == (1.0 if name == "random" else 0.0)
+
+
+def test_env_defaults_sit_between_the_paper_defaults_and_explicit_overrides():
+    assert TrainConfig.for_env("light_switch_door") == TrainConfig()
+    doorknobs = TrainConfig.for_env("doorknobs")
+    assert doorknobs.env == "doorknobs" and doorknobs.call_planner_bonus == 0.5
+    assert TrainConfig.for_env("doorknobs", call_planner_bonus=0.0).call_planner_bonus == 0.0
+    with pytest.raises(ValueError, match="unknown env"):
+        TrainConfig.for_env("nowhere")
