@@ -18,12 +18,13 @@ from jaxbridge.online import build_experiment, init_learners, make_cycle
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--num-seeds", type=int, default=16, help="seeds (default: %(default)s)")
     parser.add_argument("--first-seed", type=int, default=8, help="first seed (default: %(default)s)")
     parser.add_argument("--cycles", type=int, default=40, help="cycles (default: %(default)s)")
     parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value")
     args = parser.parse_args()
-    config = TrainConfig(num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
+    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
     changes = {}
     for item in args.overrides:
         name, value = item.split("=", 1)
