@@ -52,7 +52,7 @@ def parse_args(argv):
     p.add_argument("--env", choices=sorted(ENVS), help=f"environment (default: {d.env})")
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: all, the paper's six: "
-                        f"{', '.join(APPROACHES)})")
+                        f"{', '.join(APPROACHES)}; doorknobs: all but no_feature_selection and maple_q)")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,
@@ -127,7 +127,11 @@ def main(argv=None) -> int:
             raise UsageError(str(err)) from None
     else:
         config = make_config(args)
-        approaches = args.approaches or list(APPROACHES)
+        approaches = args.approaches or list(ENVS[config.env].default_approaches or APPROACHES)
+        skipped = [a for a in APPROACHES if a not in approaches]
+        if args.approaches is None and skipped:
+            print(f"{config.env}: not running {', '.join(skipped)} by default ({ENVS[config.env].why_not_all}); "
+                  f"--approaches all runs them", file=sys.stderr)
         out_dir = args.out / (args.name or config.env)
         try:
             prepare_run_dir(out_dir, args.overwrite)

@@ -88,6 +88,9 @@ class NoveltyEnv:
     full_state_size: ClassVar[int]
     # Training hyperparameters where this env departs from the paper-wide defaults (TrainConfig.for_env).
     train_defaults: ClassVar[dict] = {}
+    # The approaches train.py runs when none are named (None: all six) and why not all.
+    default_approaches: ClassVar[tuple[str, ...] | None] = None
+    why_not_all: ClassVar[str] = ""
 
     # ---- skills ---------------------------------------------------------------------------------
     @property

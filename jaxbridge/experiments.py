@@ -73,7 +73,13 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         with ThreadPoolExecutor(workers, thread_name_prefix="approach") as pool:
             futures = {name: pool.submit(run, name) for name in order}
             try:
-                wait(futures.values(), return_when=FIRST_EXCEPTION)
+                # Wake up now and then: the OS may deliver Ctrl-C's SIGINT to a worker thread, and Python
+                # only runs the handler (raising KeyboardInterrupt here) when the main thread runs.
+                pending = set(futures.values())
+                while pending:
+                    done, pending = wait(pending, timeout=0.2, return_when=FIRST_EXCEPTION)
+                    if any(f.exception() is not None for f in done):
+                        break
             except KeyboardInterrupt:
                 pass
             stop.set()  # after Ctrl-C or a fault: every running approach checkpoints and stops
