@@ -250,7 +250,7 @@ class Task:
     clutter_mask: jax.Array  # bool[R, 3]
     door_mask: jax.Array  # bool[D]
     door_rect: jax.Array  # float32[D, 5]: the door, and its knob
-    doorway: jax.Array  # float32[D, 5]
+    doorway: jax.Array  # float32[D, 5], upright (theta = 0)
     door_point: jax.Array  # float32[D, 2, 2]: position in doorway on the owner's / the neighbour's side
     door_mass: jax.Array  # float32[D]
     door_friction: jax.Array  # float32[D]
@@ -270,6 +270,26 @@ def room_obstacles(task: Task, room: jax.Array, door_open: jax.Array) -> tuple[j
     closed = (doors >= 0) & task.door_mask[slot] & ~door_open[slot]
     rects = jnp.concatenate([task.walls[room], task.clutter[room], task.door_rect[slot]])
     return rects, jnp.concatenate([task.wall_mask[room], task.clutter_mask[room], closed])
+
+
+def route_obstacles(task: Task, room: jax.Array, door_open: jax.Array, p: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """float32[6, 5] rectangles and their bool[6] mask that can block a straight move from p, in `room`,
+    to one of the room's waypoints: its clutter, and the walls and door of the side p is nearest to.
+
+    Why that is enough: every waypoint lies in the room's interior, the square at least CLEARANCE beyond
+    the walls' inner faces, and every wall and door grown by CLEARANCE lies outside it, in the strip along
+    its side. So a segment from p meets the grown walls or door of a side only if p is in that side's
+    strip, and p (the robot) can be in one strip at most: it leaves the interior only in a doorway."""
+    _, room_doors = layout(capacity(task))
+    q = p - task.room_xy[room]
+    side = jnp.argmin(jnp.stack([q[1], q[0], ROOM_SIZE - q[1], ROOM_SIZE - q[0]]))
+    door = jnp.asarray(room_doors)[room, side]
+    slot = jnp.maximum(door, 0)
+    walls = jax.lax.dynamic_slice_in_dim(task.walls[room], 2 * side, 2)
+    wall_mask = jax.lax.dynamic_slice_in_dim(task.wall_mask[room], 2 * side, 2)
+    closed = (door >= 0) & task.door_mask[slot] & ~door_open[slot]
+    rects = jnp.concatenate([task.clutter[room], walls, task.door_rect[slot][None]])
+    return rects, jnp.concatenate([task.clutter_mask[room], wall_mask, closed[None]])
 
 
 def in_entry_cone(p: jax.Array, goal: jax.Array, normal: jax.Array) -> jax.Array:
@@ -294,8 +314,8 @@ def _roadmap_visibility(task: Task):
     def per_room(room):
         rects, mask = room_obstacles(task, room, jnp.zeros_like(task.door_mask))
         nodes = task.nodes[room]
-        free = jax.vmap(lambda p: jnp.all(~mask | (geometry.point_rect_distance(p, rects) > CLEARANCE)))(nodes)
         seen = jax.vmap(lambda p: roadmap.visible(p, nodes, rects, mask, CLEARANCE))(nodes)
+        free = jnp.diagonal(seen)  # a segment from a waypoint to itself is the point test
         cone = jax.vmap(lambda p: jax.vmap(in_entry_cone, (None, 0, 0))(p, nodes[GOAL_NODES:], normals))(nodes)
         return free, seen, cone
 

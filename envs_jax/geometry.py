@@ -17,11 +17,11 @@ def rect(x, y, width, height, theta=0.0) -> jnp.ndarray:
                                             (x, y, width, height, theta))), axis=-1)
 
 
-def to_local(p: jnp.ndarray, r: jnp.ndarray) -> jnp.ndarray:
-    """Points in the rectangle's frame, where it is the box [0, width] x [0, height]."""
-    d = p - r[..., :2]
+def _local(p: jnp.ndarray, r: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """The point's (x, y) in the rectangle's frame, where it is the box [0, width] x [0, height]."""
+    dx, dy = p[..., 0] - r[..., X], p[..., 1] - r[..., Y]
     c, s = jnp.cos(r[..., THETA]), jnp.sin(r[..., THETA])
-    return jnp.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]], axis=-1)
+    return c * dx + s * dy, c * dy - s * dx
 
 
 def corners(r: jnp.ndarray, pad: float | jnp.ndarray = 0.0) -> jnp.ndarray:
@@ -35,43 +35,68 @@ def corners(r: jnp.ndarray, pad: float | jnp.ndarray = 0.0) -> jnp.ndarray:
                       r[..., Y, None] + s * local_x + c * local_y], axis=-1)
 
 
-def _box_distance(q: jnp.ndarray, size: jnp.ndarray) -> jnp.ndarray:
-    """Distance from local points q to the box [0, size]; 0 inside."""
-    return jnp.linalg.norm(q - jnp.clip(q, 0.0, size), axis=-1)
+# Points are handled by component, not as a trailing axis of 2: XLA:CPU fuses a reduction over a tiny
+# axis (jnp.linalg.norm) into a loop it does not vectorise.
+def _box_distance(qx: jnp.ndarray, qy: jnp.ndarray, width: jnp.ndarray, height: jnp.ndarray) -> jnp.ndarray:
+    """Distance from local points to the box [0, width] x [0, height]; 0 inside."""
+    gx, gy = jnp.maximum(jnp.maximum(-qx, qx - width), 0.0), jnp.maximum(jnp.maximum(-qy, qy - height), 0.0)
+    return jnp.sqrt(gx * gx + gy * gy)
 
 
 def point_rect_distance(p: jnp.ndarray, r: jnp.ndarray) -> jnp.ndarray:
-    return _box_distance(to_local(p, r), r[..., WIDTH:THETA])
+    return _box_distance(*_local(p, r), r[..., WIDTH], r[..., HEIGHT])
 
 
 def circle_hits_rect(centre: jnp.ndarray, radius, r: jnp.ndarray) -> jnp.ndarray:
     return point_rect_distance(centre, r) <= radius
 
 
-def point_segment_distance(p: jnp.ndarray, a: jnp.ndarray, b: jnp.ndarray) -> jnp.ndarray:
-    d = b - a
-    t = jnp.clip(jnp.sum((p - a) * d, -1) / jnp.maximum(jnp.sum(d * d, -1), 1e-20), 0.0, 1.0)
-    return jnp.linalg.norm(p - (a + t[..., None] * d), axis=-1)
+def circle_hits_upright_rect(centre: jnp.ndarray, radius, r: jnp.ndarray) -> jnp.ndarray:
+    """`circle_hits_rect` for a rectangle known to have theta = 0 (no trigonometry)."""
+    qx, qy = centre[..., 0] - r[..., X], centre[..., 1] - r[..., Y]
+    return _box_distance(qx, qy, r[..., WIDTH], r[..., HEIGHT]) <= radius
 
 
-def segment_rect_distance(a: jnp.ndarray, b: jnp.ndarray, r: jnp.ndarray) -> jnp.ndarray:
-    """Distance between the segment a-b and the rectangle (0 if they intersect): how close a circle
-    swept along the segment comes to the rectangle."""
-    qa, qb = to_local(a, r), to_local(b, r)
-    size = r[..., WIDTH:THETA]
-    # Do they intersect? Clip the segment against both slabs of the box (Liang-Barsky).
-    d = qb - qa
-    flat = jnp.abs(d) < 1e-12
-    safe = jnp.where(flat, 1.0, d)
-    t_lo, t_hi = (0.0 - qa) / safe, (size - qa) / safe
-    enter = jnp.where(flat, jnp.where((qa >= 0) & (qa <= size), -jnp.inf, jnp.inf), jnp.minimum(t_lo, t_hi))
-    leave = jnp.where(flat, jnp.where((qa >= 0) & (qa <= size), jnp.inf, -jnp.inf), jnp.maximum(t_lo, t_hi))
-    crosses = jnp.maximum(0.0, jnp.max(enter, -1)) <= jnp.minimum(1.0, jnp.min(leave, -1))
-    # Disjoint convex sets: the closest pair involves an endpoint or a box corner.
-    box = corners(rect(0.0, 0.0, size[..., 0], size[..., 1]))
-    to_corners = point_segment_distance(box, qa[..., None, :], qb[..., None, :])
-    gap = jnp.minimum(jnp.minimum(_box_distance(qa, size), _box_distance(qb, size)), jnp.min(to_corners, -1))
-    return jnp.where(crosses, 0.0, gap)
+def segment_clears_rect(a: jnp.ndarray, b: jnp.ndarray, r: jnp.ndarray, clearance) -> jnp.ndarray:
+    """The segment a-b keeps more than `clearance` from the rectangle: a circle of radius < clearance
+    moves from a to b without touching it. Exact, with no division and no square root per pair.
+
+    The rectangle grown by `clearance` is the union of two crossed boxes (grown along one axis each)
+    and four discs at its corners; the segment misses it if it misses each. A box by separating axes
+    (the box's two and the segment's normal); a disc if the segment's line passes it by, or its nearest
+    point is an endpoint (then outside the grown rectangle, checked once for all corners)."""
+    c, s = jnp.cos(r[..., THETA]), jnp.sin(r[..., THETA])
+    half_w, half_h = 0.5 * r[..., WIDTH], 0.5 * r[..., HEIGHT]
+    centre_x, centre_y = r[..., X] + c * half_w - s * half_h, r[..., Y] + s * half_w + c * half_h
+    # The segment's midpoint m and half-extent h, in the box's frame with its centre as origin.
+    mx = 0.5 * (a[..., 0] + b[..., 0]) - centre_x
+    my = 0.5 * (a[..., 1] + b[..., 1]) - centre_y
+    hx, hy = 0.5 * (b[..., 0] - a[..., 0]), 0.5 * (b[..., 1] - a[..., 1])
+    mx, my = c * mx + s * my, c * my - s * mx
+    hx, hy = c * hx + s * hy, c * hy - s * hx
+    ax, ay, amx, amy = jnp.abs(hx), jnp.abs(hy), jnp.abs(mx), jnp.abs(my)
+    m_cross_h = mx * hy - my * hx
+
+    def misses_box(ex, ey):
+        return (amx > ex + ax) | (amy > ey + ay) | (jnp.abs(m_cross_h) > ex * ay + ey * ax)
+
+    def endpoint_clear(px, py):  # outside the grown rectangle
+        dx, dy = jnp.maximum(jnp.abs(px) - half_w, 0.0), jnp.maximum(jnp.abs(py) - half_h, 0.0)
+        return dx * dx + dy * dy > clearance * clearance
+
+    clear = (misses_box(half_w + clearance, half_h) & misses_box(half_w, half_h + clearance)
+             & endpoint_clear(mx - hx, my - hy) & endpoint_clear(mx + hx, my + hy))
+    length2 = hx * hx + hy * hy
+    m_dot_h = mx * hx + my * hy
+    for sx in (-1.0, 1.0):
+        for sy in (-1.0, 1.0):
+            # Corner k = (sx half_w, sy half_h): its projection onto the segment (along h, from m) and
+            # its offset across the segment's line, both times |h|.
+            along = sx * half_w * hx + sy * half_h * hy - m_dot_h
+            across = sx * half_w * hy - sy * half_h * hx - m_cross_h
+            passes = (jnp.abs(along) >= length2) | (across * across > clearance * clearance * length2)
+            clear = clear & passes
+    return clear
 
 
 def rects_overlap(r1: jnp.ndarray, r2: jnp.ndarray) -> jnp.ndarray:

@@ -63,12 +63,20 @@ def test_circle_rectangle_collision_axis_aligned_and_rotated():
 
 def test_segment_rectangle_distance_and_overlap():
     box = geometry.rect(0.0, 0.0, 1.0, 1.0)
-    dist = lambda a, b: float(geometry.segment_rect_distance(jnp.array(a), jnp.array(b), box))
-    assert dist((-1.0, 0.5), (2.0, 0.5)) == 0.0  # straight through
-    assert dist((0.5, 0.5), (0.6, 0.6)) == 0.0  # inside
-    assert dist((-1.0, 1.3), (2.0, 1.3)) == pytest.approx(0.3)  # passing above
-    assert dist((1.5, -1.0), (1.5, 2.0)) == pytest.approx(0.5)  # passing beside
-    assert dist((1.2, 1.2), (2.0, 2.0)) == pytest.approx(0.2 * np.sqrt(2))  # nearest to a corner
+
+    def gap(a, b, r=box):  # the segment's distance to r, as the clearance test sees it
+        clears = lambda g: bool(geometry.segment_clears_rect(jnp.array(a), jnp.array(b), r, g))
+        return lambda d: clears(d - 1e-3) and not clears(d + 1e-3) and not clears(d + 0.1)
+
+    assert not geometry.segment_clears_rect(jnp.array([-1.0, 0.5]), jnp.array([2.0, 0.5]), box, 0.0)  # through
+    assert not geometry.segment_clears_rect(jnp.array([0.5, 0.5]), jnp.array([0.6, 0.6]), box, 0.0)  # inside
+    assert gap((-1.0, 1.3), (2.0, 1.3))(0.3)  # passing above
+    assert gap((1.5, -1.0), (1.5, 2.0))(0.5)  # passing beside
+    assert gap((1.2, 1.2), (2.0, 2.0))(0.2 * np.sqrt(2))  # nearest to a corner
+    assert gap((2.5, 0.0), (0.0, 2.5))(0.5 / np.sqrt(2))  # cutting past a corner
+    assert gap((1.1, 1.1), (1.1, 1.1))(0.1 * np.sqrt(2))  # a point
+    diamond = geometry.rect(0.0, 0.0, 0.2, 0.2, np.pi / 4)  # its top corner is (0, 0.2 sqrt 2)
+    assert gap((-1.0, 0.4), (1.0, 0.4), diamond)(0.4 - 0.2 * np.sqrt(2))
     tilted = geometry.rect(1.2, 0.5, 0.3, 0.3, np.pi / 4)  # its left corner reaches x = 1.2 - 0.3 / sqrt 2
     assert bool(geometry.rects_overlap(box, tilted))
     assert not bool(geometry.rects_overlap(box, geometry.rect(1.5, 0.5, 0.3, 0.3, np.pi / 4)))
@@ -166,7 +174,8 @@ def test_features_see_the_nearest_knob_of_the_robots_room_and_the_displacement()
     np.testing.assert_allclose(f, [0.125, 0.095, 0.3, 0.75, 0.0, 0.0, 0.0], atol=1e-6)
     moved = stuck.replace(robot=jnp.array([1.1, 0.45]))  # now nearest to the left door's anchor (1.005, 0.38)
     f = np.asarray(features(moved, stuck))
-    np.testing.assert_allclose(f, [0.095, 0.07, 0.0, 0.75, 0.0, 0.405, 0.45], atol=1e-6)
+    # Offsets and displacement come larger first, whatever the door's orientation (|dy| > |dx| here).
+    np.testing.assert_allclose(f, [0.095, 0.07, 0.0, 0.75, 0.0, 0.45, 0.405], atol=1e-6)
     assert f.shape == (ENV.num_features,)
 
 
