@@ -21,7 +21,7 @@ class SeedSummary:
     table_misses: int
     bridge_decisions: float  # per task
     stuck_events: float  # per task: novelties met (the planner got stuck)
-    task_size: str  # e.g. "11 cells, 3 doors"
+    task_size: str  # e.g. "11 cells, 3 doors"; "N different tasks" when the seed's tasks differ
 
 
 def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0,
@@ -43,8 +43,15 @@ def summarise(batch: TaskBatch, result: EpisodeResult) -> list[SeedSummary]:
             table_misses=int(result.table_misses[mine].sum()),
             bridge_decisions=float(result.bridge_decisions[mine].mean()),
             stuck_events=float(result.stuck_events[mine].mean()),
-            task_size=batch.specs[int(np.argmax(mine))].describe()))
+            task_size=_describe([s for s, m in zip(batch.specs, mine) if m])))
     return rows
+
+
+def _describe(specs: list) -> str:
+    """The seed's task size if all its tasks share it (Light Switch Door draws it once per seed), else a
+    count (Doorknobs maps differ task by task; `eval.py --render` shows one)."""
+    sizes = {s.describe() for s in specs}
+    return sizes.pop() if len(sizes) == 1 else f"{len(sizes)} different tasks"
 
 
 def format_table(rows: list[SeedSummary]) -> str:
