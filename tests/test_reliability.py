@@ -124,11 +124,12 @@ def test_ctrl_c_saves_a_checkpoint_of_the_last_completed_cycle(uninterrupted, tm
     run_dir = tmp_path / "interrupted" / "ours"
     args = ["--num-seeds", "2", "--cycles", "30", "--updates-per-cycle", "50", "--checkpoint-every", "100",
             "--approaches", "ours"]
-    # SIG_DFL in the child: a test run started in the background inherits an ignored SIGINT, and Python
-    # then installs no KeyboardInterrupt handler at all.
-    proc = subprocess.Popen([sys.executable, "train.py", *args, "--out", str(tmp_path), "--name", "interrupted"],
-                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    # Python's Ctrl-C handler installed explicitly in the child: a test run started in the background
+    # passes SIGINT down ignored, and Python then installs no KeyboardInterrupt handler at all.
+    argv = ["train.py", *args, "--out", str(tmp_path), "--name", "interrupted"]
+    child = ("import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+             f"sys.argv = {argv!r}; runpy.run_path('train.py', run_name='__main__')")
+    proc = subprocess.Popen([sys.executable, "-c", child], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     seen = b""
     while b" 2/30 " not in seen:  # the progress bar has shown the second cycle: interrupt now
         chunk = proc.stderr.read1(4096)
