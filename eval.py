@@ -92,19 +92,6 @@ def render(args, batch, bridge, bridge_params, controls, result, label: str) -> 
           f"{trace.steps} steps, the bridge opened {opened} door{'s' if opened != 1 else ''}) to {args.render}")
 
 
-def greedy_bridge(run_dir: Path, batch):
-    """The run's greedy bridge, its per-episode params for `batch` and its controls, as evaluate_run uses
-    them (it does not return them, so the checkpoint is read a second time)."""
-    from jaxbridge.online import episode_params
-    from jaxbridge.runner import load_learners
-
-    config, experiment, learners, _ = load_learners(run_dir)
-    owner = np.searchsorted(np.asarray(config.seeds), batch.seeds)
-    approach = experiment.approach
-    return (approach.make_bridge(batch.env, experiment.net, config.n_sample),
-            episode_params(learners, owner, np.zeros(len(owner), np.float32)), approach.controls)
-
-
 def run_directory(path: Path, approach: str | None) -> Path:
     """The run to evaluate: `path` itself, or its approach's run inside an experiment directory."""
     if (path / "experiment.json").is_file():
@@ -143,7 +130,7 @@ def evaluate_checkpoint(args) -> int:
         sized = lambda rng: lsd.sized_task(rng, args.cells, args.doors)
     start = time.perf_counter()
     try:
-        config, step, batch, result = evaluate_run(args.run, sized, args.num_tasks, args.rollout_seed)
+        config, step, batch, result, policy = evaluate_run(args.run, sized, args.num_tasks, args.rollout_seed)
     except (CheckpointError, ValueError) as err:
         raise UsageError(str(err)) from None
     what = f"{args.num_tasks} tasks of {args.cells} cells, {args.doors} doors per seed" if sized else "test tasks"
@@ -152,7 +139,7 @@ def evaluate_checkpoint(args) -> int:
     print(format_table(summarise(batch, result)))
     if args.render is not None:
         check_render_task(args, batch.size)
-        render(args, batch, *greedy_bridge(args.run, batch), result,
+        render(args, batch, *policy, result,
                f"greedy bridge of {config.approach}, cycle {step}")
     return 0
 

@@ -31,11 +31,11 @@ def read_metrics(run_dir: Path, fields=("test_solve_rate", "train_success_rate")
     return out
 
 
-def summary_rows(experiment_dir: Path, approaches: list[str]) -> list[dict]:
-    """One row per approach: mean/min/max test solve rate at the report cycles, smooth rewards."""
+def summary_rows(metrics: dict[str, dict[str, np.ndarray]]) -> list[dict]:
+    """One row per approach ({name: read_metrics(...)}): mean/min/max test solve rate at the report
+    cycles, smooth rewards."""
     rows = []
-    for name in approaches:
-        m = read_metrics(experiment_dir / name)
+    for name, m in metrics.items():
         test, train = m["test_solve_rate"], m["train_success_rate"]
         cycles = test.shape[1]
         row = {"approach": name, "label": get_approach(name).label, "seeds": test.shape[0], "cycles": cycles}
@@ -85,11 +85,10 @@ def results_markdown(env: str, rows: list[dict]) -> str:
 
 def write_comparison(experiment_dir: Path, env: str, approaches: list[str]) -> list[dict]:
     """curves.png (one line per approach, band over seeds), results.md and results.csv."""
-    rows = summary_rows(experiment_dir, approaches)
-    curves = {}
-    for name in approaches:
-        m = read_metrics(experiment_dir / name)
-        curves[get_approach(name).label] = {"test": m["test_solve_rate"], "train": m["train_success_rate"]}
+    metrics = {name: read_metrics(experiment_dir / name) for name in approaches}
+    rows = summary_rows(metrics)
+    curves = {get_approach(name).label: {"test": m["test_solve_rate"], "train": m["train_success_rate"]}
+              for name, m in metrics.items()}
     seeds = rows[0]["seeds"]
     write_atomic(experiment_dir / "curves.png", plot_curves(curves, f"{env}, {seeds} seeds per approach"))
     write_atomic(experiment_dir / "results.md", results_markdown(env, rows))

@@ -73,7 +73,8 @@ def format_table(rows: list[SeedSummary]) -> str:
 
 def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
     """Greedy evaluation of a run's latest checkpoint on each seed's test tasks, or on tasks drawn by
-    `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed)."""
+    `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed). Also returns the greedy
+    policy it ran, (bridge, per-episode params, controls), so an episode can be re-run and drawn."""
     from jaxbridge.online import episode_params
     from jaxbridge.runner import load_learners
     from jaxbridge.tasks import make_batch
@@ -92,4 +93,4 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
     bridge = approach.make_bridge(batch.env, experiment.net, config.n_sample)
     greedy = episode_params(learners, owner, np.zeros(len(owner), np.float32))
     result = run_bridge(batch, bridge, greedy, seed, approach.controls)
-    return config, step, batch, result
+    return config, step, batch, result, (bridge, greedy, approach.controls)
