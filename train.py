@@ -27,7 +27,7 @@ from jaxbridge.config import TrainConfig
 DEFAULTS = TrainConfig()
 # Flags that set the run's config; --resume takes the saved config instead.
 CONFIG_FLAGS = {"env": "env", "num_seeds": "num_seeds", "first_seed": "first_seed", "cycles": "cycles",
-                "episodes_per_cycle": "episodes_per_cycle", "updates_per_cycle": "updates_per_cycle",
+                "episodes_per_cycle": "episodes_per_cycle", "train_steps": "train_steps", "updates_per_cycle": "updates_per_cycle",
                 "batch_size": "batch_size", "call_planner_bonus": "call_planner_bonus",
                 "checkpoint_every": "checkpoint_every"}
 
@@ -60,6 +60,9 @@ def parse_args(argv):
     p.add_argument("--cycles", type=positive_int, help=f"online learning cycles (default: {d.cycles}, the paper's)")
     p.add_argument("--episodes-per-cycle", type=positive_int,
                    help=f"training episodes per cycle (default: {d.episodes_per_cycle}, the paper's)")
+    p.add_argument("--train-steps", type=positive_int,
+                   help=f"env steps per training episode at most, the training horizon (default: {d.train_steps}, "
+                        "the paper's); it must leave room to reach every seed's training goal")
     p.add_argument("--updates-per-cycle", type=non_negative_int,
                    help=f"double-DQN minibatch updates per cycle (default: {d.updates_per_cycle})")
     p.add_argument("--batch-size", type=positive_int,
@@ -88,6 +91,12 @@ def make_config(args) -> TrainConfig:
     if config.episodes_per_cycle * config.train_steps > config.buffer_capacity:
         raise UsageError(f"--episodes-per-cycle x {config.train_steps} steps must fit the replay buffer "
                          f"({config.buffer_capacity} transitions)")
+    env_cls = ENVS[config.env]
+    needed = {seed: env_cls.train_task(seed).min_steps for seed in config.seeds}
+    worst = max(needed, key=needed.get)
+    if config.train_steps < needed[worst]:
+        raise UsageError(f"--train-steps {config.train_steps} is too small to ever reach the goal: seed {worst}'s "
+                         f"training task needs at least {needed[worst]} steps")
     return config
 
 

@@ -87,6 +87,16 @@ class DoorknobsTask:
                     queue.append(n)
         return dist[self.goal_room]
 
+    @property
+    def min_steps(self) -> int:
+        """No episode reaches the goal in fewer env steps: the robot moves at most ACTION_MAGNITUDE along
+        each axis per step, so it needs the larger axis gap to the goal room over that (walls ignored)."""
+        row, col = self.goal_room
+        x0, y0 = col * ROOM_SIZE, (self.size - 1 - row) * ROOM_SIZE
+        dx = max(x0 - self.robot[0], 0.0, self.robot[0] - (x0 + ROOM_SIZE))
+        dy = max(y0 - self.robot[1], 0.0, self.robot[1] - (y0 + ROOM_SIZE))
+        return int(np.ceil(max(dx, dy) / ACTION_MAGNITUDE - 1e-9))
+
     def describe(self) -> str:
         return (f"{len(self.rooms)} rooms on {self.size}x{self.size}, {len(self.doors)} doors, "
                 f"{self.doors_to_goal} to the goal")

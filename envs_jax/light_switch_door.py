@@ -44,6 +44,12 @@ class LightSwitchDoorTask:
         return (self.num_cells - 1) + 1 + 4 * len(self.door_cells)
 
     @property
+    def min_steps(self) -> int:
+        """No action sequence reaches the goal in fewer env steps: N-1 moves, the light, and one step per
+        door that sets both its keys (skills take two, and the planner bumps into the first door)."""
+        return (self.num_cells - 1) + 1 + len(self.door_cells)
+
+    @property
     def horizon(self) -> int:
         """The paper's test horizon max(30, h + 5) (the authors' code used a fixed 30)."""
         return max(30, self.shortest_solution + 5)

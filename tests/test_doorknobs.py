@@ -351,6 +351,9 @@ def test_oracle_bridge_solves_every_test_task_of_seeds_0_to_7_and_every_training
     # Stuck once at each closed door on the way: OpenDoor, then CallPlanner.
     assert np.array_equal(result.stuck_events, doors) and np.array_equal(result.planner_calls, 1 + doors)
     assert np.array_equal(result.bridge_decisions, 2 * doors) and result.table_misses.sum() == 0
+    # min_steps (train.py refuses shorter training horizons) is a lower bound, and not a vacuous one.
+    bound = np.array([s.min_steps for s in batch.specs])
+    assert (bound <= result.steps).all() and (bound >= 0.3 * result.steps).all()
 
 
 def test_pure_planning_solves_none(results):

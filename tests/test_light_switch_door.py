@@ -21,6 +21,18 @@ def act(state, dx=0.0, dlight=0.0, dmove=0.0, dturn=0.0):
     return jax.jit(ENV.step)(state, jnp.array([dx, dlight, dmove, dturn], jnp.float32))
 
 
+def test_min_steps_is_reached_by_setting_both_keys_in_one_step():
+    """train.py refuses training horizons below a task's min_steps; the bound is tight."""
+    spec = LightSwitchDoorTask(6, (0, 3))
+    state, steps = ENV.reset(ENV.task_arrays(spec)), 0
+    for cell in range(spec.num_cells - 1):
+        if cell in spec.door_cells:
+            state, steps = act(state, dmove=lsd.MOVE_TARGET, dturn=lsd.TURN_TARGET), steps + 1
+        state, steps = act(state, dx=1.0), steps + 1
+    state, steps = act(state, dlight=lsd.LIGHT_SWITCH_VALUE), steps + 1
+    assert ENV.goal_reached(state) and steps == spec.min_steps == 5 + 1 + 2
+
+
 def test_closed_door_blocks_only_leaving_its_cell_to_the_right():
     assert float(act(fresh(x=2.5), dx=1.0).robot_x) == 2.5  # blocked in the door cell
     assert float(act(fresh(x=2.5), dx=-1.0).robot_x) == 1.5  # left is always allowed
