@@ -71,10 +71,8 @@ def verify(directory: Path, step: int) -> None:
                               f"({', '.join(changed[:3])}{' ...' if len(changed) > 3 else ''} changed); refusing to load it")
 
 
-def restore(directory: Path, like: Any, step: int | None = None) -> tuple[Any, dict, int]:
-    """Restore the state (shaped like `like`), its JSON record and its step: the latest sealed
-    checkpoint unless `step` is given. Raises CheckpointError if there is none or it is damaged."""
-    directory = Path(directory)
+def _sealed_step(directory: Path, step: int | None) -> int:
+    """The latest sealed checkpoint's step (or `step`), verified against its manifest."""
     steps = sealed_steps(directory)
     if step is None:
         if not steps:
@@ -83,6 +81,23 @@ def restore(directory: Path, like: Any, step: int | None = None) -> tuple[Any, d
     elif step not in steps:
         raise CheckpointError(f"no complete checkpoint for step {step} in {directory}")
     verify(directory, step)
+    return step
+
+
+def read_record(directory: Path, step: int | None = None) -> tuple[dict, int]:
+    """The JSON record (config, cycle, metrics) of the latest sealed checkpoint (or `step`), without
+    the state: cheap enough to check that a checkpoint belongs to a run before building the run."""
+    directory = Path(directory)
+    step = _sealed_step(directory, step)
+    with _manager(directory) as mgr:
+        return mgr.restore(step, args=ocp.args.Composite(record=ocp.args.JsonRestore())).record, step
+
+
+def restore(directory: Path, like: Any, step: int | None = None) -> tuple[Any, dict, int]:
+    """Restore the state (shaped like `like`), its JSON record and its step: the latest sealed
+    checkpoint unless `step` is given. Raises CheckpointError if there is none or it is damaged."""
+    directory = Path(directory)
+    step = _sealed_step(directory, step)
     abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, like)
     try:
         with _manager(directory) as mgr:

@@ -67,6 +67,28 @@ def load_config(run_dir: Path) -> TrainConfig:
         raise ValueError(f"{path} is not a valid run config: {err}") from None
 
 
+def check_checkpoint_belongs(config: TrainConfig, run_dir: Path) -> None:
+    """Refuse (CheckpointError) a run directory whose latest checkpoint was written by another run: of
+    another env or approach, or with another config (its state would not fit, or would mean something
+    else). Read from the checkpoint's record before anything is built."""
+    from jaxbridge.checkpoint import CheckpointError
+
+    record, step = checkpoint.read_record(run_dir / "checkpoints")
+    where = run_dir / "checkpoints" / str(step)
+    try:
+        saved = TrainConfig.from_dict(record["config"])
+    except (KeyError, TypeError, ValueError) as err:
+        raise CheckpointError(f"checkpoint {where} has no readable config ({err}); refusing to load it") from None
+    if (saved.env, saved.approach) != (config.env, config.approach):
+        raise CheckpointError(f"checkpoint {where} was written by a {saved.env} run of {saved.approach}, but the run "
+                              f"is {config.env} of {config.approach}; refusing to load it")
+    differ = [f"{f.name} {getattr(saved, f.name)} there, {getattr(config, f.name)} here"
+              for f in dataclasses.fields(config) if getattr(saved, f.name) != getattr(config, f.name)]
+    if differ:
+        raise CheckpointError(f"checkpoint {where} was written with another config ({'; '.join(differ)}); "
+                              f"refusing to load it")
+
+
 def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int) -> str | None:
     bad = ~np.isfinite(metrics.loss) | ~np.isfinite(metrics.q_abs_max)
     if not bad.any():
@@ -85,6 +107,8 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
     corrupt the state before a cycle. `bar`: a progress bar shared with other runs (else its own).
     `stop`: when set (by another thread), checkpoint the last completed cycle and raise Interrupted."""
     start = time.perf_counter()
+    if resume:
+        check_checkpoint_belongs(config, run_dir)
     experiment = build_experiment(config)
     learners = init_learners(experiment)
     history: list[CycleMetrics] = []
@@ -145,6 +169,7 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
 def load_learners(run_dir: Path) -> tuple[TrainConfig, Experiment, object, int]:
     """Rebuild a run's experiment and restore its latest learner state."""
     config = load_config(run_dir)
+    check_checkpoint_belongs(config, run_dir)
     experiment = build_experiment(config)
     learners, record, step = checkpoint.restore(run_dir / "checkpoints", init_learners(experiment))
     return config, experiment, learners, step

@@ -108,6 +108,23 @@ def test_a_checkpoint_of_another_config_version_is_refused(uninterrupted, tmp_pa
     assert proc.returncode == 2 and "config version 0 is not supported" in proc.stderr
 
 
+@pytest.mark.parametrize("field,value,message", [
+    ("env", "doorknobs", "was written by a light_switch_door run of ours, but the run is doorknobs of ours"),
+    ("num_seeds", 3, "was written with another config (num_seeds 2 there, 3 here)"),
+])
+def test_a_checkpoint_of_another_env_or_config_is_refused(uninterrupted, tmp_path, field, value, message):
+    """A run directory whose checkpoints came from elsewhere (copied in, or config.json edited)."""
+    import shutil
+    run_dir = tmp_path / "mixed"
+    shutil.copytree(uninterrupted, run_dir)
+    config = json.loads((run_dir / "config.json").read_text())
+    config[field] = value
+    (run_dir / "config.json").write_text(json.dumps(config))
+    for command in (["train.py", "--resume"], ["eval.py"]):
+        proc = cli(*command, str(run_dir))
+        assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+
+
 @pytest.mark.parametrize("args,message", [
     (["train.py", "--resume", "/nonexistent/run"], "not a run directory"),
     (["train.py", "--resume", "runs", "--cycles", "3"], "drop --cycles"),
