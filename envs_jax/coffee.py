@@ -10,10 +10,10 @@ it (TwistJug), and hand back to the planner.
 Tasks: the training task has 1 cup; each of a seed's 10 test tasks draws 1-4 cups uniformly
 (`coffee_world.test_tasks`). Everything is padded to 4 cups.
 
-Test horizon: 140 steps, the smallest multiple of 10 with which the oracle bridge solves every test
-task of seeds 0-7 (its longest episode there takes 133 steps, a 4-cup task; a test checks both). The
-authors used 100 with 4 cups per task, where their episodes were shorter only because the repeated-state
-flag cut options short (envs.md §4.6). Training episodes: 100 steps (1 cup: the oracle needs 57 at most).
+Test horizon: 110 steps, the smallest multiple of 10 with which the oracle bridge solves every test
+task of seeds 0-7 (its longest episode there takes 101 steps, on a 4-cup task; a test checks both). The
+authors' 100 (with 4 cups in every task) would cut that one episode short by a step. Training episodes:
+100 steps, as the authors' (1 cup: the oracle needs 58 at most).
 
 Skills finish when they make no progress (see `coffee_skills`), instead of the authors' class-level flag.
 """
