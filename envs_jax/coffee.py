@@ -24,7 +24,6 @@ from typing import ClassVar
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from envs_jax import coffee_skills as skills
 from envs_jax import coffee_world as world

@@ -57,8 +57,8 @@ def pose(x, y, z, tilt=0.0, wrist=0.0, fingers=0.4):
 
 
 POUR_0 = np.array([1.5 + 0.96, 3.0 + 0.24])  # cup0's pouring (x, y) for the jug
-AT_POUR_0 = dict(robot=pose(POUR_0[0], POUR_0[1] - 0.42, world.POUR_Z + 1.125, fingers=0.1), jug=POUR_0,
-                 rot=0.0, held=True, filled=True)
+AT_POUR_0 = {"robot": pose(POUR_0[0], POUR_0[1] - 0.42, world.POUR_Z + 1.125, fingers=0.1), "jug": POUR_0,
+             "rot": 0.0, "held": True, "filled": True}
 
 
 # ---- dynamics ---------------------------------------------------------------------------------------
@@ -162,7 +162,7 @@ def test_a_wrist_pushed_against_its_limit_does_not_move_and_so_does_not_stop_the
 
 
 def test_the_jug_fills_in_the_machine_once_the_machine_is_on():
-    in_machine = dict(robot=pose(9.3, 7.6, 2.9), jug=(9.0, 7.06), rot=0.0)
+    in_machine = {"robot": pose(9.3, 7.6, 2.9), "jug": (9.0, 7.06), "rot": 0.0}
     s = act(fresh(**in_machine))
     assert bool(s.machine_on) and bool(s.jug_filled)  # the press and the fill in the same step
     assert not bool(act(fresh(**{**in_machine, "jug": (8.5, 3.5)})).jug_filled)
@@ -204,7 +204,7 @@ def run_skill(state, call):
         nxt = ENV.step(state, ENV.skill_action(state, call))
         return nxt, ENV.skill_done(state, nxt, call), steps + 1
 
-    state, done, steps = jax.lax.while_loop(lambda c: ~c[1] & (c[2] < 60), body,
+    state, _, steps = jax.lax.while_loop(lambda c: ~c[1] & (c[2] < 60), body,
                                             (state, jnp.bool_(False), jnp.int32(0)))
     return state, steps
 
@@ -308,8 +308,8 @@ def test_reset_and_step_jit_and_vmap_over_seeds_and_tasks():
     batched = jax.jit(jax.vmap(env.step))(states, actions)
     single = jax.jit(env.step)
     for i in (0, 41, 79):
-        one = single(jax.tree.map(lambda x: x[i], states), actions[i])
-        assert same(one, jax.tree.map(lambda x: x[i], batched))
+        row = lambda tree, i=i: jax.tree.map(lambda x: x[i], tree)
+        assert same(single(row(states), actions[i]), row(batched))
     np.testing.assert_allclose(batched.jug_xy, np.array([s.jug for s in specs]), atol=1e-6)  # nothing held
 
 
