@@ -5,6 +5,7 @@
     python eval.py runs/light_switch_door --cells 40 --doors 8   # ... on larger tasks
     python eval.py --env light_switch_door --bridge oracle --num-seeds 8   # a hand-made bridge
     python eval.py --env doorknobs --bridge oracle --render episode.png      # ... and draw an episode
+    python eval.py --env coffee --bridge none --render-task 0 --render plan.png   # pure planning, stuck
 """
 from __future__ import annotations
 
@@ -49,7 +50,8 @@ def parse_args(argv):
                         help="seed of the rollout's randomness (random bridge, skill parameters) (default: %(default)s)")
     parser.add_argument("--render", type=Path, default=None, metavar="PATH.png",
                         help="also draw one evaluated episode to this PNG: the world, the robot's path coloured by "
-                             "who was in control (planner, bridge, CallPlanner) and the doors the bridge opened")
+                             "who was in control (planner, bridge, CallPlanner) and what the bridge fixed (doors it opened; "
+                             "Coffee: the jug it twisted, with the arm's height, tilt and wrist over time)")
     parser.add_argument("--render-task", type=non_negative_int, default=None, metavar="K",
                         help="with --render: which episode, an index into all evaluated tasks, seed after seed "
                              "(with 10 tasks per seed, K = 23 is the third seed's task 3); default: the solved task "
@@ -78,7 +80,7 @@ def check_render_task(args, num_tasks: int) -> None:
 def render(args, batch, bridge, bridge_params, controls, result, label: str) -> None:
     """Re-run the chosen evaluated episode with recording on and draw it to args.render."""
     from jaxbridge.artifacts import write_atomic
-    from jaxbridge.render import pick_episode, render_episode, trace_episodes
+    from jaxbridge.render import drawer_for, pick_episode, render_episode, trace_episodes
 
     chosen = [args.render_task] if args.render_task is not None else np.flatnonzero(batch.seeds == batch.seeds[0])
     traces = trace_episodes(batch, bridge, bridge_params, chosen, args.rollout_seed, controls, expected=result)
@@ -87,9 +89,9 @@ def render(args, batch, bridge, bridge_params, controls, result, label: str) -> 
         write_atomic(args.render, render_episode(batch.env, trace, label))
     except OSError as err:
         raise UsageError(f"cannot write {args.render}: {err.strerror or err}") from None
-    opened = int(trace.opened_by_bridge.sum())
+    summary = drawer_for(batch.env).bridge_summary(trace)
     print(f"drew seed {trace.seed}, task {trace.task} ({'solved' if trace.success else 'not solved'} in "
-          f"{trace.steps} steps, the bridge opened {opened} door{'s' if opened != 1 else ''}) to {args.render}")
+          f"{trace.steps} steps, {summary}) to {args.render}")
 
 
 def run_directory(path: Path, approach: str | None) -> Path:

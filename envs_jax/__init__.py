@@ -1,9 +1,10 @@
 """Pure-functional JAX environments with novelties, and their planner models."""
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, SkillCall, SkillSpec
+from envs_jax.coffee import Coffee
 from envs_jax.doorknobs import Doorknobs
 from envs_jax.light_switch_door import LightSwitchDoor
 
-ENVS = {LightSwitchDoor.name: LightSwitchDoor, Doorknobs.name: Doorknobs}
+ENVS = {LightSwitchDoor.name: LightSwitchDoor, Doorknobs.name: Doorknobs, Coffee.name: Coffee}
 
 
 def env_class(name: str) -> type[NoveltyEnv]:
@@ -12,4 +13,4 @@ def env_class(name: str) -> type[NoveltyEnv]:
         raise ValueError(f"unknown env {name!r}; choose from {', '.join(sorted(ENVS))}")
     return ENVS[name]
 
-__all__ = ['BridgeAction', 'BridgeObs', 'NoveltyEnv', 'SkillCall', 'SkillSpec', 'LightSwitchDoor', 'Doorknobs', 'ENVS', 'env_class']
+__all__ = ['BridgeAction', 'BridgeObs', 'NoveltyEnv', 'SkillCall', 'SkillSpec', 'LightSwitchDoor', 'Doorknobs', 'Coffee', 'ENVS', 'env_class']

@@ -5,7 +5,8 @@ control (planner, bridge, CallPlanner), and the doors the bridge opened, so a us
 per-episode keys, so these are the very episodes that were scored (checked against the evaluation's
 results), and keeps only a small view of each recorded state (a recorded state carries its whole task).
 `render_episode` draws one trace; what the world looks like is the env's business, a `Drawer` per env
-in `DRAWERS` (Doorknobs: the room map from above; Light Switch Door: the row of cells over time).
+in `DRAWERS` (Doorknobs: the room map from above; Light Switch Door: the row of cells over time; Coffee:
+the table from above plus the arm's height, tilt and wrist over time).
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Arc, Circle, Patch, Polygon, Rectangle
 
+from envs_jax import coffee_world as coffee
 from envs_jax import geometry
 from envs_jax.base import NoveltyEnv
 from envs_jax.doorknobs_maps import ROBOT_RADIUS
@@ -46,7 +48,8 @@ class EpisodeTrace:
     bridge_decisions: int
     actor: np.ndarray  # int32[steps]: ACTOR_* of each step
     xy: np.ndarray  # float32[steps + 1, 2]: the robot before each step, then after the last
-    open: np.ndarray  # bool[steps + 1, D]: the open doors, at the same times
+    open: np.ndarray  # bool[steps + 1, D]: the open doors (Coffee: the jug graspable), at the same times
+    details: np.ndarray | None = None  # float[steps + 1, K]: whatever else the env's drawer records
 
     @property
     def steps(self) -> int:
@@ -81,13 +84,15 @@ def pick_episode(traces: list[EpisodeTrace]) -> EpisodeTrace:
     return max(solved, key=lambda t: int(t.opened_by_bridge.sum())) if solved else traces[0]
 
 
-@partial(jax.jit, static_argnames=("env", "bridge", "snapshot", "max_steps", "controls"))
-def _recorded_rollout(env, bridge, snapshot, params, tasks, tables, horizons, keys, max_steps, controls):
-    """rollout(record=True), keeping of each recorded state only its snapshot (XLA then drops the rest)."""
+@partial(jax.jit, static_argnames=("env", "bridge", "drawer", "max_steps", "controls"))
+def _recorded_rollout(env, bridge, drawer, params, tasks, tables, horizons, keys, max_steps, controls):
+    """rollout(record=True), keeping of each recorded state only its snapshot and details (XLA then drops
+    the rest)."""
     result, records = rollout(env, bridge, params, tasks, tables, horizons, keys, max_steps, record=True,
                               controls=controls)
-    xy, door_open = jax.vmap(jax.vmap(partial(snapshot, env)))(records.env_state)  # [T, B, ...]
-    return result, records.actor, xy, door_open
+    per_state = lambda state: (*drawer.snapshot(env, state), drawer.details(env, state))
+    xy, door_open, details = jax.vmap(jax.vmap(per_state))(records.env_state)  # [T, B, ...]
+    return result, records.actor, xy, door_open, details
 
 
 def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, seed: int = 0,
@@ -102,8 +107,8 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
     # One step past the longest horizon, so the last record holds the final state. An episode's draws for
     # its first max_steps steps do not depend on how many are drawn (partitionable threefry); the check
     # against `expected` below would catch it if they did.
-    result, actor, xy, door_open = jax.tree.map(np.asarray, _recorded_rollout(
-        batch.env, bridge, drawer_for(batch.env).snapshot, params, take(batch.tasks), take(batch.tables),
+    result, actor, xy, door_open, details = jax.tree.map(np.asarray, _recorded_rollout(
+        batch.env, bridge, drawer_for(batch.env), params, take(batch.tasks), take(batch.tables),
         take(batch.horizons), keys, batch.max_steps + 1, controls))
     if expected is not None:
         for field in ("success", "steps", "planner_calls", "bridge_decisions", "stuck_events"):
@@ -115,7 +120,7 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
         traces.append(EpisodeTrace(
             spec=batch.specs[i], seed=owner, task=int(i - np.argmax(batch.seeds == owner)),
             success=bool(result.success[row]), bridge_decisions=int(result.bridge_decisions[row]),
-            actor=actor[:n, row], xy=xy[: n + 1, row], open=door_open[: n + 1, row]))
+            actor=actor[:n, row], xy=xy[: n + 1, row], open=door_open[: n + 1, row], details=details[: n + 1, row]))
     return traces
 
 
@@ -124,10 +129,24 @@ class Drawer:
     """How one env's episodes look. Subclasses draw the world; the path and legend are shared."""
 
     figsize = (9.5, 7.0)
+    world_rect = (0.03, 0.04, 0.62, 0.82)  # where the world's axes sit in the figure
+    in_place = "turns a knob"  # what the bridge does when it acts without moving the robot
 
     def snapshot(self, env: NoveltyEnv, state) -> tuple[jax.Array, jax.Array]:
         """(float32[2] robot position, bool[D] open doors) of one state; jittable."""
         raise NotImplementedError
+
+    def details(self, env: NoveltyEnv, state) -> jax.Array:
+        """float32[K]: anything else of one state the drawing needs (none by default); jittable."""
+        return jnp.zeros(0, jnp.float32)
+
+    def bridge_summary(self, trace: EpisodeTrace) -> str:
+        """What the bridge fixed in the episode, for the title and eval.py's report."""
+        opened = int(trace.opened_by_bridge.sum())
+        return f"the bridge opened {opened} door{'s' if opened != 1 else ''}"
+
+    def draw_panels(self, fig, env: NoveltyEnv, trace: EpisodeTrace) -> None:
+        """Extra axes beside the world (none by default)."""
 
     def path(self, trace: EpisodeTrace) -> np.ndarray:
         """float[steps + 1, 2]: where the path runs in the picture."""
@@ -138,7 +157,7 @@ class Drawer:
         raise NotImplementedError
 
 
-def draw_path(ax, path: np.ndarray, actor: np.ndarray) -> list:
+def draw_path(ax, path: np.ndarray, actor: np.ndarray, in_place: str = "turns a knob") -> list:
     """The path as lines coloured by actor, plus markers where an actor acted without moving the robot
     (the bridge turning a knob, every CallPlanner), which a line alone would not show. Returns legend
     handles for what was drawn."""
@@ -150,7 +169,7 @@ def draw_path(ax, path: np.ndarray, actor: np.ndarray) -> list:
             lines[a] = Line2D([], [], color=ACTORS[a][1], lw=2.2, label=f"path: {ACTORS[a][0]}")
     handles = [lines[a] for a in sorted(lines)]
     # A CallPlanner usually follows the bridge's last skill on the spot: a small diamond on a larger disc.
-    for a, marker, size, label in ((ACTOR_BRIDGE, "o", 110, "bridge acts in place (turns a knob)"),
+    for a, marker, size, label in ((ACTOR_BRIDGE, "o", 110, f"bridge acts in place ({in_place})"),
                                    (ACTOR_CALL_PLANNER, "D", 28, "bridge calls CallPlanner")):
         at = path[:-1][(actor == a) & ~moved]
         if len(at):
@@ -274,7 +293,95 @@ class LightSwitchDoorDrawer(Drawer):
                 Patch(fc=GOAL_ROOM, ec="grey", label="light's cell (goal)")]
 
 
-DRAWERS: dict[str, Drawer] = {"doorknobs": DoorknobsDrawer(), "light_switch_door": LightSwitchDoorDrawer()}
+class CoffeeDrawer(Drawer):
+    """The table from above: the machine with its button and dispense area, the cups (green once filled,
+    with their liquid / target at the end), the jug at its start and its end (handle drawn), the robot's
+    (x, y) path; below, the robot's height, tilt and wrist over time, shaded while the bridge acts."""
+
+    figsize = (9.5, 9.5)
+    world_rect = (0.03, 0.36, 0.62, 0.56)
+    in_place = "twists the jug"
+    Z, TILT, WRIST, JUG, ROT, FILLED, ON, LIQUID = 0, 1, 2, 4, 6, 8, 9, 10  # columns of `details`
+
+    def snapshot(self, env, state):
+        return state.robot[:2], (jnp.abs(state.jug_rot) < coffee.PICK_JUG_ROT_TOL)[None]  # graspable
+
+    def details(self, env, state):
+        flags = jnp.stack([state.jug_held, state.jug_filled, state.machine_on]).astype(jnp.float32)
+        return jnp.concatenate([state.robot[2:], state.jug_xy, state.jug_rot[None], flags, state.cup_liquid])
+
+    def bridge_summary(self, trace):
+        rot = trace.details[:, self.ROT]
+        if trace.opened_by_bridge.any():
+            return f"the bridge twisted the jug from rot {rot[0]:.2f} to {rot[-1]:.2f}"
+        return f"the bridge left the jug ungraspable (rot {rot[-1]:.2f})" if not trace.open[-1, 0] else \
+            "the bridge did not twist the jug"
+
+    def _jug(self, ax, xy, rot, **style) -> None:
+        ax.add_patch(Circle(xy, coffee.JUG_RADIUS, zorder=3, **style))
+        handle = xy + coffee.HANDLE_OFFSET * np.array([np.cos(rot - np.pi / 2), np.sin(rot - np.pi / 2)])
+        ax.plot(*np.stack([xy, handle]).T, color="black", lw=2.0, zorder=3)
+
+    def draw_world(self, ax, env, trace):
+        task, end = env.task_arrays(trace.spec), trace.details[-1]
+        ax.add_patch(Rectangle((0, 0), 10, 10, fc=ROOM, ec="#cccccc", zorder=0))
+        ax.add_patch(Rectangle(coffee.MACHINE_XY, *coffee.MACHINE_SIZE[:2], fc="#9e9e9e", ec=WALL, zorder=1))
+        ax.add_patch(Circle(coffee.DISPENSE[:2], np.sqrt(coffee.DISPENSE_TOL), fc="none", ec="#616161", ls="--",
+                            zorder=1))
+        button = OPENED if end[self.ON] > 0.5 else CLOSED
+        ax.add_patch(Circle(coffee.BUTTON[:2], 0.15, fc=button, ec="black", lw=0.6, zorder=2))
+        filled_cup, empty_cup = "#81c784", "white"
+        for c in np.flatnonzero(task.cup_mask):
+            full = end[self.LIQUID + c] > task.cup_target[c]
+            ax.add_patch(Circle(task.cup_xy[c], coffee.CUP_RADIUS, fc=filled_cup if full else empty_cup, ec="black",
+                                lw=0.8, zorder=2))
+            ax.text(task.cup_xy[c, 0], task.cup_xy[c, 1] - 0.45, f"cup{c}\n{end[self.LIQUID + c]:.2f}/"
+                    f"{task.cup_target[c]:.2f}", ha="center", va="top", fontsize=7, zorder=2)
+        start = trace.details[0]
+        self._jug(ax, start[self.JUG:self.JUG + 2], start[self.ROT], fc="none", ec=CLUTTER, ls="--", lw=1.2)
+        self._jug(ax, end[self.JUG:self.JUG + 2], end[self.ROT], fc=CLUTTER if end[self.FILLED] > 0.5 else "white",
+                  ec="black", lw=1.0, alpha=0.85)
+        handles = []
+        for xy, fc, label in ((trace.xy[0], "white", "robot at the start"), (trace.xy[-1], "#555555", "robot at the end")):
+            ax.add_patch(Circle(xy, 0.12, fc=fc, ec="black", lw=1.0, zorder=7))
+            handles.append(Line2D([], [], ls="", marker="o", markersize=8, markerfacecolor=fc, markeredgecolor="black",
+                                  label=label))
+        ax.set_xlim(-0.1, 10.1)
+        ax.set_ylim(-0.1, 10.1)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        return [*handles, Patch(fc="#9e9e9e", ec=WALL, label="coffee machine"),
+                Line2D([], [], ls="", marker="o", color=button, markeredgecolor="black",
+                       label=f"button (machine {'on' if end[self.ON] > 0.5 else 'off'} at the end)"),
+                Line2D([], [], color="#616161", ls="--", label="dispense area (jug in machine)"),
+                Line2D([], [], ls="", marker="o", markersize=9, markerfacecolor="none", markeredgecolor=CLUTTER,
+                       label="jug at the start (line: handle)"),
+                Line2D([], [], ls="", marker="o", markersize=9, markerfacecolor=CLUTTER, markeredgecolor="black",
+                       label="jug at the end (brown: filled)"),
+                Patch(fc=filled_cup, ec="black", label="cup filled (liquid/target)"),
+                Patch(fc=empty_cup, ec="black", label="cup not filled")]
+
+    def draw_panels(self, fig, env, trace):
+        ax = fig.add_axes((0.08, 0.05, 0.57, 0.22))
+        steps = np.arange(trace.steps + 1)
+        for a, i, j in actor_segments(trace.actor):
+            if a != ACTOR_PLANNER:
+                ax.axvspan(i, j, color=ACTORS[a][1], alpha=0.25, lw=0)
+        lines = ax.plot(steps, trace.details[:, self.Z], color="#37474f", lw=1.6, label="z (left)")
+        angles = ax.twinx()
+        lines += angles.plot(steps, trace.details[:, self.TILT], color="#8e24aa", lw=1.2, label="tilt (right)")
+        lines += angles.plot(steps, trace.details[:, self.WRIST], color="#00897b", lw=1.2, label="wrist (right)")
+        lines += angles.plot(steps, trace.details[:, self.ROT], color=CLUTTER, lw=1.2, ls=":", label="jug rot (right)")
+        ax.set_xlim(0, max(trace.steps, 1))
+        ax.set_xlabel("env step (shaded: bridge, CallPlanner)")
+        ax.set_ylabel("height")
+        angles.set_ylabel("radians")
+        ax.legend(handles=lines, loc="upper left", bbox_to_anchor=(1.12, 1.0), fontsize=8, frameon=False)
+
+
+DRAWERS: dict[str, Drawer] = {"doorknobs": DoorknobsDrawer(), "light_switch_door": LightSwitchDoorDrawer(),
+                              "coffee": CoffeeDrawer()}
 
 
 def drawer_for(env: NoveltyEnv) -> Drawer:
@@ -287,16 +394,16 @@ def render_episode(env: NoveltyEnv, trace: EpisodeTrace, label: str = "") -> byt
     """PNG bytes of one episode; `label` says whose bridge it is (e.g. "oracle bridge")."""
     drawer = drawer_for(env)
     fig = Figure(figsize=drawer.figsize, dpi=130)  # no pyplot: no global figure state, nothing to close
-    ax = fig.add_axes((0.03, 0.04, 0.62, 0.82))
+    ax = fig.add_axes(drawer.world_rect)
     handles = drawer.draw_world(ax, env, trace)
-    handles = draw_path(ax, drawer.path(trace), trace.actor) + handles
+    handles = draw_path(ax, drawer.path(trace), trace.actor, drawer.in_place) + handles
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
-    opened = int(trace.opened_by_bridge.sum())
     outcome = f"solved in {trace.steps} steps" if trace.success else f"not solved ({trace.steps} steps)"
     ax.set_title(f"{env.name}, seed {trace.seed}, task {trace.task}: {trace.spec.describe()}\n"
-                 f"{label + ': ' if label else ''}{outcome}; the bridge opened {opened} "
-                 f"door{'s' if opened != 1 else ''} in {trace.bridge_decisions} decisions",
+                 f"{label + ': ' if label else ''}{outcome}; {drawer.bridge_summary(trace)} "
+                 f"in {trace.bridge_decisions} decisions",
                  loc="left", fontsize=10)  # on the axes, so it follows the map's aspect (no gap)
+    drawer.draw_panels(fig, env, trace)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", bbox_inches="tight", pad_inches=0.15)
     return buffer.getvalue()

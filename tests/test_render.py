@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
+from envs_jax.coffee import Coffee
 from envs_jax.doorknobs import Doorknobs
 from jaxbridge.bridges import make_bridge
 from jaxbridge.evaluate import run_bridge
@@ -18,6 +19,7 @@ from jaxbridge.render import (
     EpisodeTrace,
     actor_segments,
     draw_path,
+    drawer_for,
     pick_episode,
     render_episode,
     trace_episodes,
@@ -104,6 +106,25 @@ def test_rendered_png_is_a_valid_image(oracle_episode):
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
     image = matplotlib.image.imread(io.BytesIO(png), format="png")
     assert image.shape[0] > 400 and image.shape[1] > 600 and image.std() > 0.05
+
+
+def test_coffee_oracle_episode_shows_the_bridge_twisting_the_jug_and_renders():
+    spec = Coffee.test_tasks(0)[1]  # 3 cups
+    batch = make_batch(Coffee, [spec], [0])
+    bridge = make_bridge("oracle", batch.env)
+    result = run_bridge(batch, bridge, seed=0)
+    t = trace_episodes(batch, bridge, None, [0], seed=0, expected=result)[0]
+    assert t.success and t.details.shape == (t.steps + 1, 10 + batch.env.max_cups)
+    # The jug turns graspable on a bridge step (TwistJug), which twists in place.
+    assert not t.open[0, 0] and t.opened_by_bridge.tolist() == [True]
+    twist = t.opened_at[0]
+    np.testing.assert_allclose(t.xy[twist + 1], t.xy[twist])
+    assert drawer_for(batch.env).bridge_summary(t) == "the bridge twisted the jug from rot 1.50 to 0.00"
+    liquid = t.details[-1, 10:13]  # every cup ends above its target
+    assert np.all(liquid > 0.75 * np.array([c[2] for c in spec.cups]))
+    png = render_episode(batch.env, t, "oracle bridge")
+    image = matplotlib.image.imread(io.BytesIO(png), format="png")
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and image.shape[0] > 800 and image.shape[1] > 600 and image.std() > 0.05
 
 
 @pytest.fixture(scope="module")
