@@ -71,6 +71,12 @@ class CoffeeTask:
 
     horizon: ClassVar[int] = TEST_HORIZON
 
+    @property
+    def min_steps(self) -> int:
+        """No episode reaches the goal in fewer env steps: each cup needs more than its target poured,
+        POUR_VELOCITY per step (a lower bound: the jug must also be twisted, filled and carried)."""
+        return sum(int(np.floor(TARGET_FRACTION * capacity / POUR_VELOCITY)) + 1 for _, _, capacity in self.cups)
+
     def describe(self) -> str:
         return f"{len(self.cups)} cup{'s' if len(self.cups) != 1 else ''}"
 

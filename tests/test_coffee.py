@@ -358,6 +358,8 @@ def test_oracle_bridge_solves_every_test_task_of_seeds_0_to_7_within_the_test_ho
     # The test horizon is the smallest multiple of 10 that fits the longest test episode.
     horizon = Coffee.test_tasks(0)[0].horizon
     assert horizon - 10 < result.steps[:80].max() <= horizon and result.steps[80:].max() <= Coffee.train_steps
+    # min_steps (train.py refuses shorter training horizons) is a lower bound.
+    assert all(spec.min_steps <= steps for spec, steps in zip(batch.specs, result.steps))
 
 
 def test_pure_planning_solves_none(results):
