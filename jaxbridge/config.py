@@ -44,6 +44,8 @@ class TrainConfig:
     "decision" (the authors' code). See docs/RESULTS.md for the comparison."""
     hidden_sizes: tuple[int, ...] = (32, 32)
     """Q-network hidden layers (the paper: [32, 32])."""
+    q_ensemble: int = 1
+    """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     n_sample: int = 100
     """Parameter samples per skill in the greedy argmax (the paper: 100 for Light Switch Door)."""
     n_target_sample: int = 10
@@ -59,6 +61,10 @@ class TrainConfig:
     """Replay transitions kept per seed (FIFO); the paper's runs stored about 10k."""
     call_planner_bonus: float = 0.0
     """Extra reward when CallPlanner's transition reaches the goal (the authors' code: 0.5; off by default)."""
+    clip_bootstrap: bool = False
+    """Clip the bootstrapped next-state value of every TD target to [0, 1 + call_planner_bonus], the range
+    every true Q lies in (rewards are 0, or that much at the goal). Stops the max over sampled parameters
+    from feeding its upward noise back into the targets (off in the paper)."""
     checkpoint_every: int = 10
     """Save the learner state every this many cycles (and after the last one)."""
 

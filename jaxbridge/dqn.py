@@ -30,6 +30,10 @@ class Learner:
     updates: jax.Array  # int32: minibatch updates so far
 
 
+def q_network(config: TrainConfig) -> QNetwork:
+    return QNetwork(config.hidden_sizes, config.q_ensemble)
+
+
 def make_optimizer(config: TrainConfig) -> optax.GradientTransformation:
     return optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(config.learning_rate))
 
@@ -50,7 +54,7 @@ def init_learner(env: NoveltyEnv, config: TrainConfig, key: jax.Array) -> Learne
     """A fresh network (the target starts as its copy), optimiser and empty replay buffer. The input
     size follows the approach's observation (object-centric features or the full state)."""
     k_init, k_run = jax.random.split(key)
-    net = QNetwork(config.hidden_sizes)
+    net = q_network(config)
     num_features = observation_size(env, get_approach(config.approach).controls)
     params = net.init(k_init, jnp.zeros((1, input_size(env, num_features)), jnp.float32))
     return Learner(params=params, target_params=jax.tree.map(jnp.copy, params),
@@ -64,12 +68,14 @@ def td_targets(env: NoveltyEnv, config: TrainConfig, params: Any, target_params:
                key: jax.Array) -> jax.Array:
     """Double DQN: the online net picks a* among the next state's applicable actions (n_target_sample
     parameter samples per skill), the target net values it; no bootstrapping past `done`."""
-    net = QNetwork(config.hidden_sizes)
+    net = q_network(config)
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
     best, _ = jax.vmap(lambda f, g, k: best_candidate(env, net, params, f, g, skills, k))(
         batch.next_features, batch.next_num_ground, keys)
     next_q = net.apply(target_params, encode(env, batch.next_features, best.skill, best.param))
+    if config.clip_bootstrap:
+        next_q = jnp.clip(next_q, 0.0, 1.0 + config.call_planner_bonus)
     return batch.reward + config.gamma * jnp.where(batch.done, 0.0, next_q)
 
 
@@ -97,14 +103,14 @@ def relabel(env: NoveltyEnv, config: TrainConfig, learner: Learner, key: jax.Arr
 def update_step(env: NoveltyEnv, config: TrainConfig, learner: Learner,
                 targets: jax.Array) -> tuple[Learner, jax.Array]:
     """One Adam step on a uniform minibatch of (transition, target), then a polyak step of the target net."""
-    net = QNetwork(config.hidden_sizes)
+    net = q_network(config)
     key, k_sample = jax.random.split(learner.key)
     index = sample_indices(learner.buffer, k_sample, config.batch_size)  # targets are indexed by slot
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
 
     def loss_fn(params):
-        q = net.apply(params, encode(env, batch.features, batch.skill, batch.param))
-        return jnp.mean((q - targets[index]) ** 2), jnp.max(jnp.abs(q))
+        q = net.apply(params, encode(env, batch.features, batch.skill, batch.param), members=True)
+        return jnp.mean((q - targets[index]) ** 2), jnp.max(jnp.abs(q))  # every member fits the targets
 
     (loss, q_abs_max), grads = jax.value_and_grad(loss_fn, has_aux=True)(learner.params)
     updates, opt_state = make_optimizer(config).update(grads, learner.opt_state, learner.params)

@@ -19,7 +19,7 @@ from flax import struct
 from envs_jax import env_class
 from jaxbridge.approaches import Approach, get_approach
 from jaxbridge.config import TrainConfig
-from jaxbridge.dqn import Learner, epsilon, init_learner, learn
+from jaxbridge.dqn import Learner, epsilon, init_learner, learn, q_network
 from jaxbridge.meta_policy import rollout
 from jaxbridge.q_bridge import QBridgeParams, QNetwork
 from jaxbridge.replay import add
@@ -67,7 +67,7 @@ def build_experiment(config: TrainConfig) -> Experiment:
     train_owner = [s for s in seeds for _ in range(config.episodes_per_cycle)]
     train = make_batch(env_cls, train_specs, train_owner, horizons=[config.train_steps] * len(train_specs))
     test = evaluation_batch(env_cls, seeds, config.num_test_tasks)
-    net = QNetwork(config.hidden_sizes)
+    net = q_network(config)
     approach = get_approach(config.approach)
     return Experiment(config, approach, train, test, net, approach.make_bridge(train.env, net, config.n_sample),
                       approach.make_bridge(test.env, net, config.n_sample))

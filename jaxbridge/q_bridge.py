@@ -38,22 +38,47 @@ class UniformDense(nn.Module):
 LEAKY_SLOPE = 0.01
 
 
+def _mlp(x: jax.Array, hidden_sizes: Sequence[int]) -> jax.Array:
+    for size in hidden_sizes:
+        x = nn.leaky_relu(UniformDense(size)(x), LEAKY_SLOPE)
+    return UniformDense(1, scale=0.0)(x)[..., 0]
+
+
+class _Member(nn.Module):
+    hidden_sizes: Sequence[int]
+
+    @nn.compact
+    def __call__(self, x: jax.Array) -> jax.Array:
+        return _mlp(x, self.hidden_sizes)
+
+
 class QNetwork(nn.Module):
-    """MLP with leaky-ReLU hidden layers and a scalar output.
+    """MLP with leaky-ReLU hidden layers and a scalar output; optionally an ensemble of such MLPs whose
+    value is their minimum (clipped double Q).
 
     Two departures from the authors' plain ReLU network, both measured (docs/RESULTS.md): with sparse
     rewards nearly every target is 0 at first, and fitting them switched most ReLUs of the second layer
     off for good (9% alive after a few cycles on seed 0), leaving a constant Q that never fitted the few
     rewarded transitions. A leaky slope keeps every unit trainable; the output layer starts at zero, so
-    the untrained Q is 0 everywhere (the authors' untrained Q is too)."""
+    the untrained Q is 0 everywhere (the authors' untrained Q is too).
+
+    With `ensemble` > 1, independently initialised members are fitted to the same targets and Q is
+    their minimum, in the greedy argmax and in the targets alike: where the members disagree (features
+    or parameters unlike the training data) the value is the pessimistic one, so the argmax over many
+    sampled parameters no longer picks one member's upward error (docs/RESULTS.md, Doorknobs)."""
 
     hidden_sizes: Sequence[int] = (32, 32)
+    ensemble: int = 1
 
     @nn.compact
-    def __call__(self, x: jax.Array) -> jax.Array:
-        for size in self.hidden_sizes:
-            x = nn.leaky_relu(UniformDense(size)(x), LEAKY_SLOPE)
-        return UniformDense(1, scale=0.0)(x)[..., 0]
+    def __call__(self, x: jax.Array, members: bool = False) -> jax.Array:
+        """Q of x[..., input]: [...], or every member's, [ensemble, ...], with `members`."""
+        if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
+            q = _mlp(x, self.hidden_sizes)[None]
+        else:
+            q = nn.vmap(_Member, variable_axes={"params": 0}, split_rngs={"params": True}, in_axes=None,
+                        out_axes=0, axis_size=self.ensemble)(self.hidden_sizes)(x)
+        return q if members else jnp.min(q, axis=0)
 
 
 def input_size(env: NoveltyEnv, num_features: int) -> int:
