@@ -46,7 +46,7 @@ def default_workers(approaches: list[str]) -> int:
 
 
 def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
-                     resume: bool = False, workers: int | None = None) -> dict[str, dict]:
+                     resume: bool = False, workers: int | None = None, devices: list | None = None) -> dict[str, dict]:
     """Train every approach (run directory `experiment_dir/<approach>`), `workers` at a time, then write
     the comparison files (figure, results.md, results.csv), also after a fault or Ctrl-C for the
     approaches that have files. With `resume`, finished approaches are kept, started ones continue
@@ -66,7 +66,8 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         started = (run_dir / "checkpoints").is_dir() and bool(checkpoint.sealed_steps(run_dir / "checkpoints"))
         if not started:
             prepare_run_dir(run_dir, overwrite=True)
-        return train(dataclasses.replace(config, approach=name), run_dir, resume=started, bar=bar, stop=stop)
+        return train(dataclasses.replace(config, approach=name), run_dir, resume=started, bar=bar, stop=stop,
+                     devices=devices)
 
     order = sorted(approaches, key=lambda a: -COST.get(a, 0))
     try:
