@@ -4,7 +4,8 @@ compared (the paper's figure and tables).
 The approaches run concurrently in worker threads: each one's cycles are one jitted XLA computation
 that releases the GIL, so on a 2-core CPU two approaches train in about the time of one (measured 2.2x
 for two 8-seed cycles in two threads vs one after the other). Each approach's numbers do not depend on
-what runs beside it. One progress bar counts the cycles of all of them.
+what runs beside it. One progress bar counts the cycles of all of them. Each approach also shards its
+seeds over `devices` (jaxbridge/devices.py); neither changes any number.
 """
 from __future__ import annotations
 
