@@ -12,6 +12,10 @@ approach, mean and min-max band over seeds), results.md and results.csv (test so
 10/25/50/100 and the final smooth reward), and one run directory per approach with config.json,
 metrics.csv (one row per seed x cycle), summary.json, curves.png and checkpoints/ (orbax, whole learner
 state), which eval.py loads. Exit codes: 0 done, 2 bad input, 3 numerical fault, 130 interrupted.
+
+Devices: the seeds are sharded over --devices local devices (all GPUs, or on a CPU-only machine one
+virtual CPU device per core), each device training its share of the seeds; the numbers are
+bit-identical whatever the device count, and a run may resume on another count. See docs/PERFORMANCE.md.
 """
 from __future__ import annotations
 
@@ -23,6 +27,7 @@ from envs_jax import ENVS
 from jaxbridge.approaches import APPROACHES
 from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
 from jaxbridge.config import TrainConfig
+from jaxbridge.devices import device_count_arg, select_devices
 
 DEFAULTS = TrainConfig()
 # Flags that set the run's config; --resume takes the saved config instead.
@@ -81,6 +86,11 @@ def parse_args(argv):
     p.add_argument("--workers", type=positive_int, default=None,
                    help="approaches trained at the same time, in threads (default: one per CPU core, at most one "
                         "per approach); results do not depend on it")
+    p.add_argument("--devices", type=device_count_arg, default="auto", metavar="auto|N",
+                   help="shard the seeds over N local devices: auto = all GPUs/TPUs, or on a CPU-only machine one "
+                        "virtual CPU device per core (set before JAX starts; XLA_FLAGS="
+                        "--xla_force_host_platform_device_count=K takes precedence). Seeds need not divide evenly. "
+                        "Results do not depend on it (default: %(default)s)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
     return p.parse_args(argv)
 
@@ -110,6 +120,10 @@ def report(name: str, info: dict) -> str:
 
 def main(argv=None) -> int:
     args = parse_args(argv)
+    try:
+        devices = select_devices(args.devices)  # before anything starts JAX (CPU device count)
+    except ValueError as err:
+        raise UsageError(str(err)) from None
     import time
     from jaxbridge.checkpoint import CheckpointError
     from jaxbridge.experiments import is_experiment_dir, load_experiment, train_approaches
@@ -128,10 +142,10 @@ def main(argv=None) -> int:
             if is_experiment_dir(out_dir):
                 config, approaches = load_experiment(out_dir)
                 run = lambda: train_approaches(config, approaches, out_dir, progress, resume=True,
-                                               workers=args.workers)
+                                               workers=args.workers, devices=devices)
             else:  # one approach's run directory
                 config = load_config(out_dir)
-                run = lambda: {config.approach: train(config, out_dir, progress, resume=True)}
+                run = lambda: {config.approach: train(config, out_dir, progress, resume=True, devices=devices)}
         except ValueError as err:
             raise UsageError(str(err)) from None
     else:
@@ -148,7 +162,8 @@ def main(argv=None) -> int:
             raise UsageError(str(err)) from None
         except OSError as err:
             raise UsageError(f"cannot write experiment directory {out_dir}: {err.strerror}") from None
-        run = lambda: train_approaches(config, approaches, out_dir, progress, workers=args.workers)
+        run = lambda: train_approaches(config, approaches, out_dir, progress, workers=args.workers,
+                                       devices=devices)
     try:
         summaries = run()
     except CheckpointError as err:

@@ -55,8 +55,9 @@ def metrics_csv(history: list, seeds: list[int]) -> str:
     return out.getvalue()
 
 
-def summary(history: list, seeds: list[int], elapsed_s: float) -> dict:
-    """Headline numbers: the tables of reference/results.md, for this run."""
+def summary(history: list, seeds: list[int], elapsed_s: float, devices: str | None = None) -> dict:
+    """Headline numbers: the tables of reference/results.md, for this run (`devices`: what ran it, e.g.
+    "2 cpu"; informational, the numbers do not depend on it)."""
     arrays = history_arrays(history)
     rates = arrays["test_solve_rate"]
     test_smooth = smooth(rates)
@@ -68,6 +69,7 @@ def summary(history: list, seeds: list[int], elapsed_s: float) -> dict:
 
     return {
         "seeds": seeds, "cycles": cycles, "elapsed_s": round(elapsed_s, 2),
+        **({"devices": devices} if devices else {}),
         "test_solve_rate_at": {str(c): at(c) for c in REPORT_CYCLES if c <= cycles},
         "smooth_reward_final": {"mean": float(test_smooth[:, -1].mean()),
                                 "per_seed": [round(float(x), 4) for x in test_smooth[:, -1]]},
@@ -108,9 +110,9 @@ def plot_curves(curves: dict[str, dict[str, np.ndarray]], title: str) -> bytes:
 
 
 def write_run_files(run_dir: Path, config_dict: dict, history: list, seeds: list[int], elapsed_s: float,
-                    label: str = "ours") -> dict:
+                    label: str = "ours", devices: str | None = None) -> dict:
     arrays = history_arrays(history)
-    info = summary(history, seeds, elapsed_s)
+    info = summary(history, seeds, elapsed_s, devices)
     write_atomic(run_dir / "metrics.csv", metrics_csv(history, seeds))
     write_atomic(run_dir / "summary.json", json.dumps(info, indent=2) + "\n")
     curves = {label: {"test": arrays["test_solve_rate"], "train": arrays["train_success_rate"]}}

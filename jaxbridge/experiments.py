@@ -4,7 +4,8 @@ compared (the paper's figure and tables).
 The approaches run concurrently in worker threads: each one's cycles are one jitted XLA computation
 that releases the GIL, so on a 2-core CPU two approaches train in about the time of one (measured 2.2x
 for two 8-seed cycles in two threads vs one after the other). Each approach's numbers do not depend on
-what runs beside it. One progress bar counts the cycles of all of them.
+what runs beside it. One progress bar counts the cycles of all of them. Each approach also shards its
+seeds over `devices` (jaxbridge/devices.py); neither changes any number.
 """
 from __future__ import annotations
 
@@ -46,7 +47,7 @@ def default_workers(approaches: list[str]) -> int:
 
 
 def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
-                     resume: bool = False, workers: int | None = None) -> dict[str, dict]:
+                     resume: bool = False, workers: int | None = None, devices: list | None = None) -> dict[str, dict]:
     """Train every approach (run directory `experiment_dir/<approach>`), `workers` at a time, then write
     the comparison files (figure, results.md, results.csv), also after a fault or Ctrl-C for the
     approaches that have files. With `resume`, finished approaches are kept, started ones continue
@@ -66,7 +67,8 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         started = (run_dir / "checkpoints").is_dir() and bool(checkpoint.sealed_steps(run_dir / "checkpoints"))
         if not started:
             prepare_run_dir(run_dir, overwrite=True)
-        return train(dataclasses.replace(config, approach=name), run_dir, resume=started, bar=bar, stop=stop)
+        return train(dataclasses.replace(config, approach=name), run_dir, resume=started, bar=bar, stop=stop,
+                     devices=devices)
 
     order = sorted(approaches, key=lambda a: -COST.get(a, 0))
     try:

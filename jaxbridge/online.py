@@ -1,9 +1,11 @@
 """The online learning loop: per cycle, training episodes, double-DQN updates, greedy test evaluation.
 
-One jitted `cycle` runs a whole cycle for every seed at once: the episodes of all seeds form one batch
-of the meta-policy rollout (the planner's table lookups, the bridge's decisions and the env steps of
-every seed and episode advance together), the learner updates are `vmap`ped over seeds. A host loop
-over cycles drives progress, logging and checkpoints; nothing inside a cycle touches the host.
+One jitted `cycle` runs a whole cycle for every seed: the seed axis is sharded over the devices and
+each device runs the same per-seed cycle on its seeds one after another (jaxbridge/devices.py says why
+not a `vmap`: bit-identical numbers whatever the device count). Within a seed, its episodes form one
+batch of the meta-policy rollout (the planner's table lookups, the bridge's decisions and the env steps
+of every episode advance together). A host loop over cycles drives progress, logging and checkpoints;
+nothing inside a cycle touches the host.
 """
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ from flax import struct
 from envs_jax import env_class
 from jaxbridge.approaches import Approach, get_approach
 from jaxbridge.config import TrainConfig
+from jaxbridge.devices import SeedMesh
 from jaxbridge.dqn import Learner, epsilon, init_learner, learn, q_network
 from jaxbridge.meta_policy import rollout
 from jaxbridge.q_bridge import QBridgeParams, QNetwork
@@ -85,67 +88,94 @@ def episode_params(learners: Learner, owner: np.ndarray, eps: jax.Array) -> QBri
     return QBridgeParams(q=jax.tree.map(lambda x: x[owner], learners.params), epsilon=eps)
 
 
-def make_cycle(experiment: Experiment) -> Callable[[Learner], tuple[Learner, CycleMetrics]]:
+def _repeat(params, n: int):
+    """One seed's network for each of n episodes."""
+    return jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), params)
+
+
+def _by_seed(tree, seeds: int):
+    """Seed-major batch [seeds * n, ...] -> [seeds, n, ...]."""
+    return jax.tree.map(lambda x: jnp.reshape(x, (seeds, -1) + x.shape[1:]), tree)
+
+
+def make_seed_cycle(experiment: Experiment) -> Callable:
+    """One seed's cycle: (learner, its training tasks, tables, horizons, its test tasks, tables,
+    horizons) -> (learner, CycleMetrics of scalars). The same computation for every seed."""
     config, train, test = experiment.config, experiment.train, experiment.test
     approach, controls = experiment.approach, experiment.approach.controls
-    seeds, episodes, num_tests = config.num_seeds, config.episodes_per_cycle, config.num_test_tasks
-    train_owner = np.repeat(np.arange(seeds), episodes)
-    test_owner = np.repeat(np.arange(seeds), num_tests)
+    episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train.env.num_skills
 
-    def cycle(learners: Learner, train_tasks, train_tables, train_horizons, test_tasks, test_tables,
-              test_horizons) -> tuple[Learner, CycleMetrics]:
-        keys = jax.vmap(lambda k: jax.random.split(k, 4))(learners.key)
-        k_next, k_train, k_learn, k_test = (keys[:, i] for i in range(4))
+    def seed_cycle(learner: Learner, train_tasks, train_tables, train_horizons, test_tasks, test_tables,
+                   test_horizons) -> tuple[Learner, CycleMetrics]:
+        k_next, k_train, k_learn, k_test = jax.random.split(learner.key, 4)
 
-        # 1. Training episodes, epsilon-greedy, on every seed's training task.
-        eps = epsilon(config, learners.decisions)
-        explore = episode_params(learners, train_owner, eps[train_owner])
-        episode_keys = jax.vmap(lambda k: jax.random.split(k, episodes))(k_train).reshape(-1)
+        # 1. Training episodes, epsilon-greedy, on the seed's training task.
+        eps = epsilon(config, learner.decisions)
+        explore = QBridgeParams(q=_repeat(learner.params, episodes), epsilon=jnp.full(episodes, eps))
         result, records = rollout(train.env, experiment.train_bridge, explore, train_tasks, train_tables,
-                                  train_horizons, episode_keys, config.train_steps, record=approach.learns,
-                                  controls=controls)
-        decisions = result.bridge_decisions.reshape(seeds, episodes).sum(1)
+                                  train_horizons, jax.random.split(k_train, episodes), config.train_steps,
+                                  record=approach.learns, controls=controls)
+        decisions = result.bridge_decisions.sum()
 
         if approach.learns:
-            # 2. One transition per bridge decision into each seed's replay buffer.
+            # 2. One transition per bridge decision into the replay buffer.
             transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
                 records, result.success, call_planner, config.call_planner_bonus)
-            by_seed = lambda x: x.reshape((seeds, -1) + x.shape[2:])
-            buffers = jax.vmap(add)(learners.buffer, jax.tree.map(by_seed, transitions), by_seed(valid))
-            learners = learners.replace(buffer=buffers, decisions=learners.decisions + decisions, key=k_learn)
+            flat = lambda x: x.reshape((-1,) + x.shape[2:])
+            buffer = add(learner.buffer, jax.tree.map(flat, transitions), flat(valid))
+            learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)
 
-            # 3. Double-DQN updates, every seed its own.
-            learners, loss, q_abs_max = jax.vmap(partial(learn, train.env, config))(learners, decisions)
+            # 3. Double-DQN updates.
+            learner, loss, q_abs_max = learn(train.env, config, learner, decisions)
         else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
-            learners = learners.replace(decisions=learners.decisions + decisions)
-            eps = jnp.full_like(eps, 1.0 if approach.bridge == "random" else 0.0)
-            loss = q_abs_max = jnp.zeros(seeds, jnp.float32)
-        learners = learners.replace(key=k_next)
+            learner = learner.replace(decisions=learner.decisions + decisions)
+            eps = jnp.float32(1.0 if approach.bridge == "random" else 0.0)
+            loss = q_abs_max = jnp.float32(0.0)
+        learner = learner.replace(key=k_next)
 
-        # 4. Greedy evaluation on every seed's test tasks.
-        greedy = episode_params(learners, test_owner, jnp.zeros(len(test_owner), jnp.float32))
-        test_keys = jax.vmap(lambda k: jax.random.split(k, num_tests))(k_test).reshape(-1)
+        # 4. Greedy evaluation on the seed's test tasks.
+        greedy = QBridgeParams(q=_repeat(learner.params, num_tests), epsilon=jnp.zeros(num_tests, jnp.float32))
         tested, _ = rollout(test.env, experiment.test_bridge, greedy, test_tasks, test_tables, test_horizons,
-                            test_keys, test.max_steps, controls=controls)
+                            jax.random.split(k_test, num_tests), test.max_steps, controls=controls)
 
-        per_seed = lambda x, n: x.reshape(seeds, n)
         metrics = CycleMetrics(
-            test_solve_rate=per_seed(tested.success, num_tests).mean(1),
-            train_success_rate=per_seed(result.success, episodes).mean(1),
-            train_env_steps=per_seed(result.steps, episodes).sum(1),
-            train_decisions=decisions,
-            test_env_steps=per_seed(tested.steps, num_tests).sum(1),
-            epsilon=eps, loss=loss, q_abs_max=q_abs_max, buffer_size=learners.buffer.size,
-            table_misses=per_seed(result.table_misses, episodes).sum(1)
-            + per_seed(tested.table_misses, num_tests).sum(1))
-        return learners, metrics
+            test_solve_rate=tested.success.mean(), train_success_rate=result.success.mean(),
+            train_env_steps=result.steps.sum(), train_decisions=decisions, test_env_steps=tested.steps.sum(),
+            epsilon=eps, loss=loss, q_abs_max=q_abs_max, buffer_size=learner.buffer.size,
+            table_misses=result.table_misses.sum() + tested.table_misses.sum())
+        return learner, metrics
 
-    # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical fault
-    # during a cycle can still checkpoint the last good one.
-    jitted = jax.jit(cycle)
-    return lambda learners: jitted(learners, train.tasks, train.tables, train.horizons, test.tasks,
-                                   test.tables, test.horizons)
+    return seed_cycle
+
+
+class Cycle:
+    """One jitted cycle of every seed: `cycle(learners) -> (learners, metrics)`.
+
+    Learners and metrics carry the placed seed axis of `seeds` (padded to a multiple of the device
+    count and sharded over the devices: `seeds.place(init_learners(...))`, `seeds.unpad(...)`); with
+    one device, or seeds divisible by the device count, that is just the seed axis. Each device runs
+    the per-seed cycle on its seeds one after another (jaxbridge/devices.py), so the numbers do not
+    depend on the device count."""
+
+    def __init__(self, experiment: Experiment, seeds: SeedMesh | None = None):
+        num_seeds = experiment.config.num_seeds
+        self.seeds = seeds or SeedMesh(num_seeds)
+        assert self.seeds.num_seeds == num_seeds
+        train, test = experiment.train, experiment.test
+        self._inputs = self.seeds.place(_by_seed((train.tasks, train.tables, train.horizons, test.tasks, test.tables,
+                                                  test.horizons), num_seeds))
+        self._real = self.seeds.real()
+        # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical
+        # fault during a cycle can still checkpoint the last good one.
+        self._run = jax.jit(self.seeds.map_seeds(make_seed_cycle(experiment)))
+
+    def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
+        return self._run(self._real, learners, *self._inputs)
+
+
+def make_cycle(experiment: Experiment, seeds: SeedMesh | None = None) -> Cycle:
+    return Cycle(experiment, seeds)
 
 
 def smooth(rates: np.ndarray, window: int = 25) -> np.ndarray:

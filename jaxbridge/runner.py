@@ -17,6 +17,7 @@ from tqdm import tqdm
 from jaxbridge import artifacts, checkpoint
 from jaxbridge.approaches import get_approach
 from jaxbridge.config import TrainConfig
+from jaxbridge.devices import SeedMesh, describe
 from jaxbridge.online import CycleMetrics, Experiment, build_experiment, init_learners, make_cycle
 
 
@@ -101,15 +102,18 @@ def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int)
 
 def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: bool = False,
           fault_injection: Callable | None = None, bar: tqdm | None = None,
-          stop: threading.Event | None = None) -> dict:
+          stop: threading.Event | None = None, devices: list | None = None) -> dict:
     """Run the cycles of `config` (continuing the latest checkpoint with `resume`), writing the run
     files and checkpoints into `run_dir`. `fault_injection(cycle, learners) -> learners` lets tests
-    corrupt the state before a cycle. `bar`: a progress bar shared with other runs (else its own).
-    `stop`: when set (by another thread), checkpoint the last completed cycle and raise Interrupted."""
+    corrupt the state before a cycle (seed i is slot i of the leading axis). `bar`: a progress bar
+    shared with other runs (else its own). `stop`: when set (by another thread), checkpoint the last
+    completed cycle and raise Interrupted. `devices`: the seed axis is sharded over them (default: the
+    first local device); the numbers do not depend on them, and a run may resume on others."""
     start = time.perf_counter()
     if resume:
         check_checkpoint_belongs(config, run_dir)
     experiment = build_experiment(config)
+    seeds = SeedMesh(config.num_seeds, tuple(devices or jax.local_devices()[:1]))
     learners = init_learners(experiment)
     history: list[CycleMetrics] = []
     elapsed_before = 0.0
@@ -118,13 +122,15 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
         history, elapsed_before = _history(record), float(record["elapsed_s"])
     else:
         artifacts.write_atomic(run_dir / "config.json", json.dumps(config.to_dict(), indent=2) + "\n")
-    cycle = make_cycle(experiment)
+    cycle = make_cycle(experiment, seeds)
+    learners = seeds.place(learners)  # checkpoints hold the unpadded state on one device
     last_saved = len(history)
     elapsed = lambda: elapsed_before + time.perf_counter() - start
 
     def save(learners, history) -> None:
         nonlocal last_saved
-        checkpoint.save(run_dir / "checkpoints", len(history), learners, _record(config, history, elapsed()))
+        checkpoint.save(run_dir / "checkpoints", len(history), seeds.unpad(learners),
+                        _record(config, history, elapsed()))
         last_saved = len(history)
 
     # (learners, history) after the last completed cycle, replaced in one assignment so that Ctrl-C at
@@ -142,7 +148,7 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
                 raise KeyboardInterrupt
             learners = done[0] if fault_injection is None else fault_injection(c, done[0])
             updated, metrics = cycle(learners)
-            metrics = jax.tree.map(np.asarray, metrics)
+            metrics = jax.tree.map(lambda x: np.asarray(x)[: config.num_seeds], metrics)  # drop padding
             message = _fault(metrics, c, config.seeds, last_saved)
             if message:
                 raise NumericalFault(message)
@@ -162,8 +168,8 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
             bar.close()
         if done[1]:  # the files always describe the cycles completed so far
             artifacts.write_run_files(run_dir, config.to_dict(), done[1], config.seeds, elapsed(),
-                                      label=get_approach(config.approach).label)
-    return artifacts.summary(done[1], config.seeds, elapsed())
+                                      label=get_approach(config.approach).label, devices=describe(seeds.devices))
+    return artifacts.summary(done[1], config.seeds, elapsed(), describe(seeds.devices))
 
 
 def load_learners(run_dir: Path) -> tuple[TrainConfig, Experiment, object, int]:

@@ -1,0 +1,105 @@
+"""Sharding the seeds over devices does not change a single bit: a short training on 2 virtual CPU
+devices (3 seeds: one padded slot) gives the metrics and parameters of 1 device, and a run resumes on
+another device count to the same numbers."""
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import jax
+import numpy as np
+import pytest
+
+from jaxbridge import checkpoint
+from jaxbridge.config import TrainConfig
+from jaxbridge.devices import SeedMesh, device_count_arg
+from jaxbridge.online import build_experiment, init_learners
+
+ROOT = Path(__file__).resolve().parents[1]
+SHORT = ["--num-seeds", "3", "--cycles", "3", "--updates-per-cycle", "20", "--checkpoint-every", "1",
+         "--approaches", "ours", "--no-progress"]
+
+
+def train(*args, env=None):
+    return subprocess.run([sys.executable, "train.py", *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=600, env=env)
+
+
+def start(*args):
+    return subprocess.Popen([sys.executable, "train.py", *args], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def exact(run_dir: Path):
+    """What must match bit for bit: the latest checkpoint's step, its whole learner state (networks,
+    target, optimizer, replay buffer, keys, counters), the metrics as it records them (float32, exact)
+    and the metrics.csv text."""
+    config = TrainConfig.from_dict(json.loads((run_dir / "config.json").read_text()))
+    state, record, step = checkpoint.restore(run_dir / "checkpoints", init_learners(build_experiment(config)))
+    leaves = [np.asarray(x) for x in jax.tree.leaves(state.replace(key=jax.random.key_data(state.key)))]
+    return step, leaves, record["history"], (run_dir / "metrics.csv").read_text()
+
+
+def same(a, b) -> bool:
+    step_a, leaves_a, *rest_a = a
+    step_b, leaves_b, *rest_b = b
+    return (step_a == step_b and len(leaves_a) == len(leaves_b) and rest_a == rest_b
+            and all(x.dtype == y.dtype and np.array_equal(x, y) for x, y in zip(leaves_a, leaves_b)))
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    out = tmp_path_factory.mktemp("runs")
+    # Both at once (each compiles its program on one core for most of its time).
+    procs = [start(*SHORT, "--devices", str(n), "--out", str(out), "--name", f"dev{n}") for n in (1, 2)]
+    for proc in procs:
+        _, err = proc.communicate(timeout=600)
+        assert proc.returncode == 0, err
+    return out
+
+
+def test_two_devices_give_the_metrics_and_parameters_of_one(runs):
+    one, two = runs / "dev1" / "ours", runs / "dev2" / "ours"
+    assert json.loads((two / "summary.json").read_text())["devices"] == "2 cpu"
+    assert json.loads((one / "summary.json").read_text())["devices"] == "1 cpu"
+    a, b = exact(one), exact(two)
+    assert a[0] == 3 and len(a[2]) == 3
+    assert same(a, b)
+
+
+def test_a_run_resumes_on_another_device_count_to_the_same_numbers(runs, tmp_path):
+    copy = tmp_path / "resumed"
+    shutil.copytree(runs / "dev1", copy)
+    ckpt = copy / "ours" / "checkpoints"
+    shutil.rmtree(ckpt / "3")
+    (ckpt / "3.sha256.json").unlink()  # back to cycle 2, then cycle 3 on 2 devices
+    proc = train("--resume", str(copy), "--devices", "2", "--no-progress")
+    assert proc.returncode == 0, proc.stderr
+    assert same(exact(copy / "ours"), exact(runs / "dev1" / "ours"))
+
+
+def test_bad_device_counts_are_one_line_errors():
+    for value, message in (("0", "expected auto or a positive integer, got 0"),
+                           ("foo", "expected auto or a positive integer, got 'foo'")):
+        proc = train("--devices", value, "--cycles", "1")
+        assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
+    # More devices than the machine has (here: a CPU fixed at one device by XLA_FLAGS, as a GPU box is
+    # fixed at its GPUs).
+    env = {**__import__("os").environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=1",
+           "JAX_PLATFORMS": "cpu"}
+    proc = train("--devices", "3", "--cycles", "1", env=env)
+    assert proc.returncode == 2 and "--devices 3: only 1 CPU device(s) here" in proc.stderr
+    assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_seed_padding_round_trips():
+    assert device_count_arg("auto") == "auto" and device_count_arg("4") == 4
+    device = jax.local_devices()[0]
+    assert SeedMesh(3, (device,) * 2).pad(np.arange(3)).tolist() == [0, 1, 2, 2]  # padding only needs the count
+    assert SeedMesh(4, (device,) * 2).padded == 4 and SeedMesh(3, (device,) * 4).padded == 4
+    mesh = SeedMesh(3, (device,))
+    tree = {"a": np.arange(6.0).reshape(3, 2), "k": jax.random.split(jax.random.key(0), 3)}
+    back = mesh.unpad(mesh.place(tree))
+    assert np.array_equal(back["a"], tree["a"])
+    assert np.array_equal(jax.random.key_data(back["k"]), jax.random.key_data(tree["k"]))
