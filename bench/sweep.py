@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from jaxbridge.config import TrainConfig
+from jaxbridge.devices import SeedMesh, select_devices
 from jaxbridge.online import build_experiment, init_learners, make_cycle
 
 
@@ -22,21 +23,24 @@ def main() -> None:
     parser.add_argument("--num-seeds", type=int, default=16, help="seeds (default: %(default)s)")
     parser.add_argument("--first-seed", type=int, default=8, help="first seed (default: %(default)s)")
     parser.add_argument("--cycles", type=int, default=40, help="cycles (default: %(default)s)")
-    parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value")
+    parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value (booleans: True/False)")
     args = parser.parse_args()
+    devices = select_devices("auto")  # as train.py: the seeds over every core; results do not depend on it
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
     changes = {}
     for item in args.overrides:
         name, value = item.split("=", 1)
-        changes[name] = type(getattr(config, name))(value)
+        kind = type(getattr(config, name))
+        changes[name] = value == "True" if kind is bool else kind(value)
     config = dataclasses.replace(config, **changes)
     start = time.perf_counter()
     experiment = build_experiment(config)
-    learners, cycle = init_learners(experiment), make_cycle(experiment)
+    seeds = SeedMesh(config.num_seeds, tuple(devices))
+    learners, cycle = seeds.place(init_learners(experiment)), make_cycle(experiment, seeds)
     rates = []
     for _ in range(config.cycles):
         learners, metrics = cycle(learners)
-        rates.append(np.asarray(metrics.test_solve_rate))
+        rates.append(np.asarray(seeds.unpad(metrics).test_solve_rate))
     rates = np.array(rates).T
     for seed, row in zip(config.seeds, rates):
         print(f"{seed:>3} " + "".join(str(min(9, int(r * 10))) for r in row))
