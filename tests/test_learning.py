@@ -10,7 +10,7 @@ from envs_jax.light_switch_door import LightSwitchDoor
 from jaxbridge import checkpoint
 from jaxbridge.bridges import make_bridge
 from jaxbridge.config import TrainConfig
-from jaxbridge.dqn import epsilon, init_learner, td_targets
+from jaxbridge.dqn import epsilon, init_learner, learn, td_targets
 from jaxbridge.meta_policy import rollout
 from jaxbridge.online import build_experiment, init_learners, make_cycle, smooth
 from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
@@ -62,6 +62,44 @@ def test_double_dqn_target_on_a_hand_built_batch():
         expected = 0.0 + cfg.gamma * q(target, batch.next_features[i], chosen, candidates[chosen])
         assert y[i] == pytest.approx(expected, abs=1e-5)
     assert y[2] == 1.0  # terminal: no bootstrapping
+
+
+def test_bootstrapped_values_are_clipped_to_the_achievable_range_only_when_asked():
+    """A target net that says Q = 5 everywhere (output bias 5): the bootstrap is clipped to 1 + bonus."""
+    net = QNetwork()
+    params = net.init(jax.random.key(0), jnp.zeros((1, input_size(ENV, ENV.num_features))))
+    out = params["params"]["UniformDense_2"]
+    high = {"params": {**params["params"], "UniformDense_2": {"kernel": out["kernel"], "bias": out["bias"] + 5.0}}}
+    f = jnp.zeros((2, ENV.num_features))
+    batch = Transition(features=f, skill=jnp.array([0, 0]), param=jnp.zeros(2), reward=jnp.array([0.0, 1.5]),
+                       done=jnp.array([False, True]), next_features=f,
+                       next_num_ground=jnp.ones((2, ENV.num_skills + 1), jnp.int32))
+    for clip, expected in ((False, 0.8 * 5.0), (True, 0.8 * 1.5)):
+        cfg = TrainConfig(call_planner_bonus=0.5, clip_bootstrap=clip)
+        y = np.asarray(td_targets(ENV, cfg, high, high, batch, jax.random.key(1)))
+        assert y[0] == pytest.approx(expected) and y[1] == 1.5  # terminal rewards are never clipped
+
+
+def test_an_ensemble_is_the_minimum_of_independent_members_all_fitted_to_the_targets():
+    x = jax.random.normal(jax.random.key(0), (64, input_size(ENV, ENV.num_features)))
+    single = QNetwork((32, 32)).init(jax.random.key(1), x)
+    assert set(single["params"]) == {"UniformDense_0", "UniformDense_1", "UniformDense_2"}  # old checkpoints load
+    pair = QNetwork((32, 32), ensemble=2)
+    cfg = TrainConfig(q_ensemble=2, updates_per_cycle=300, n_target_sample=2, buffer_capacity=64, batch_size=64)
+    learner = init_learner(ENV, cfg, jax.random.key(2))
+    kernels = jax.tree.leaves(learner.params)
+    assert all(k.shape[0] == 2 for k in kernels) and not np.allclose(kernels[1][0], kernels[1][1])
+    # A buffer of terminal transitions with reward 1 for skill 0 and 0 otherwise: both members must learn it.
+    f = jax.random.uniform(jax.random.key(3), (64, ENV.num_features))
+    skill = jnp.arange(64) % 2
+    batch = Transition(features=f, skill=skill, param=jnp.zeros(64), reward=(skill == 0).astype(jnp.float32),
+                       done=jnp.ones(64, bool), next_features=f, next_num_ground=jnp.ones((64, ENV.num_skills + 1), jnp.int32))
+    learner = learner.replace(buffer=add(learner.buffer, batch, jnp.ones(64, bool)))
+    learner, loss, _ = jax.jit(lambda l: learn(ENV, cfg, l, jnp.int32(64)))(learner)
+    members = pair.apply(learner.params, encode(ENV, f, skill, jnp.zeros(64)), members=True)
+    assert members.shape == (2, 64) and np.abs(np.asarray(members) - np.asarray(batch.reward)).max() < 0.2
+    value = pair.apply(learner.params, encode(ENV, f, skill, jnp.zeros(64)))
+    assert np.array_equal(np.asarray(value), np.asarray(members).min(0))
 
 
 def test_replay_buffer_masked_insert_wraps_fifo_and_samples_stored_items():
