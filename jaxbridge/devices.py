@@ -28,16 +28,8 @@ CPU_FLAG = "xla_force_host_platform_device_count"
 
 def device_count_arg(text: str) -> str | int:
     """argparse type of --devices: "auto" or a positive integer."""
-    import argparse
-    if text.strip() == "auto":
-        return "auto"
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected auto or a positive integer, got {text!r}") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected auto or a positive integer, got {value}")
-    return value
+    from jaxbridge.cli import auto_or_positive_int
+    return auto_or_positive_int(text)
 
 
 def cpu_cores() -> int:

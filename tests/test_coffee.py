@@ -11,10 +11,10 @@ from envs_jax import coffee_world as world
 from envs_jax.base import SkillCall
 from envs_jax.coffee import CUP_ATOMS, SINGLE_ATOMS, Coffee
 from envs_jax.coffee_world import CoffeeTask
-from jaxbridge.bridges import make_bridge
-from jaxbridge.meta_policy import rollout
 from jaxbridge.tasks import make_batch
 from planner.strips import ground
+
+from oracle_vs_planning import oracle_and_pure_planning
 
 ENV = Coffee()  # 4 cup slots
 # Three cups far apart (pouring positions at x + 0.96, y + 0.24), the jug on the table.
@@ -327,19 +327,7 @@ def batch():
 
 @pytest.fixture(scope="module")
 def results(batch):
-    """The oracle bridge and pure planning in one rollout (one compilation)."""
-    oracle, none = make_bridge("oracle", batch.env), make_bridge("none", batch.env)
-
-    def either(use_oracle, obs, key):
-        return jax.tree.map(lambda a, b: jnp.where(use_oracle, a, b), oracle(None, obs, key), none(None, obs, key))
-
-    twice = lambda tree: jax.tree.map(lambda x: jnp.concatenate([x, x]), tree)
-    use_oracle = jnp.arange(2 * batch.size) < batch.size
-    result, _ = rollout(batch.env, either, use_oracle, twice(batch.tasks), twice(batch.tables), twice(batch.horizons),
-                        jax.random.split(jax.random.key(0), 2 * batch.size), batch.max_steps)
-    result = jax.tree.map(np.asarray, result)
-    return {"oracle": jax.tree.map(lambda x: x[: batch.size], result),
-            "none": jax.tree.map(lambda x: x[batch.size:], result)}
+    return oracle_and_pure_planning(batch)
 
 
 def test_the_planner_model_never_twists(batch):

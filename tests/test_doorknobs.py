@@ -12,9 +12,9 @@ from envs_jax import doorknobs_maps as maps
 from envs_jax import geometry
 from envs_jax.base import SkillCall
 from envs_jax.doorknobs import Doorknobs
-from jaxbridge.bridges import make_bridge
-from jaxbridge.meta_policy import rollout
 from jaxbridge.tasks import make_batch
+
+from oracle_vs_planning import oracle_and_pure_planning
 
 ENV = Doorknobs(map_size=2)
 SPEC = Doorknobs.train_task(0)  # rooms (0,1), (1,0), (1,1); doors (0,1) bottom, (1,1) left
@@ -320,20 +320,7 @@ def batch():
 
 @pytest.fixture(scope="module")
 def results(batch):
-    """The oracle bridge and pure planning in one rollout (one compilation): the batch twice, each
-    episode's bridge picked by its params."""
-    oracle, none = make_bridge("oracle", batch.env), make_bridge("none", batch.env)
-
-    def either(use_oracle, obs, key):
-        return jax.tree.map(lambda a, b: jnp.where(use_oracle, a, b), oracle(None, obs, key), none(None, obs, key))
-
-    twice = lambda tree: jax.tree.map(lambda x: jnp.concatenate([x, x]), tree)
-    use_oracle = jnp.arange(2 * batch.size) < batch.size
-    result, _ = rollout(batch.env, either, use_oracle, twice(batch.tasks), twice(batch.tables), twice(batch.horizons),
-                        jax.random.split(jax.random.key(0), 2 * batch.size), batch.max_steps)
-    result = jax.tree.map(np.asarray, result)
-    return {"oracle": jax.tree.map(lambda x: x[: batch.size], result),
-            "none": jax.tree.map(lambda x: x[batch.size:], result)}
+    return oracle_and_pure_planning(batch)
 
 
 def test_the_planner_model_plans_through_the_closed_doors(batch):
