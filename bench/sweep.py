@@ -22,6 +22,7 @@ def main() -> None:
     parser.add_argument("--num-seeds", type=int, default=16, help="seeds (default: %(default)s)")
     parser.add_argument("--first-seed", type=int, default=8, help="first seed (default: %(default)s)")
     parser.add_argument("--cycles", type=int, default=40, help="cycles (default: %(default)s)")
+    parser.add_argument("--save", help="also save the rates, float[seeds, cycles], to this .npy file")
     parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value")
     args = parser.parse_args()
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
@@ -38,6 +39,8 @@ def main() -> None:
         learners, metrics = cycle(learners)
         rates.append(np.asarray(metrics.test_solve_rate))
     rates = np.array(rates).T
+    if args.save:
+        np.save(args.save, rates)
     for seed, row in zip(config.seeds, rates):
         print(f"{seed:>3} " + "".join(str(min(9, int(r * 10))) for r in row))
     mean = rates.mean(0)

@@ -1,0 +1,76 @@
+"""Why a trained bridge fails: train seeds with config overrides (as bench.sweep), then print the greedy
+bridge's decisions on the test tasks it does not solve (step, skill, parameter, features, applicable
+actions, Q of the pick and of CallPlanner) and the cycle's test solve rates.
+
+    python -m bench.decisions --env coffee --first-seed 0 --num-seeds 8 --cycles 40 updates_per_cycle=250
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxbridge.config import TrainConfig
+from jaxbridge.meta_policy import rollout
+from jaxbridge.online import build_experiment, episode_params, init_learners, make_cycle
+from jaxbridge.q_bridge import encode
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="coffee")
+    parser.add_argument("--num-seeds", type=int, default=8)
+    parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument("--cycles", type=int, default=40)
+    parser.add_argument("--max-failed", type=int, default=3, help="failed tasks printed per seed")
+    parser.add_argument("--max-decisions", type=int, default=12, help="decisions printed per failed task")
+    parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value")
+    args = parser.parse_args()
+    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
+    changes = {}
+    for item in args.overrides:
+        name, value = item.split("=", 1)
+        changes[name] = type(getattr(config, name))(value)
+    config = dataclasses.replace(config, **changes)
+    experiment = build_experiment(config)
+    learners, cycle = init_learners(experiment), make_cycle(experiment)
+    rates = []
+    for _ in range(config.cycles):
+        learners, metrics = cycle(learners)
+        rates.append(np.asarray(metrics.test_solve_rate))
+    rates = np.array(rates).T
+    for seed, row in zip(config.seeds, rates):
+        print(f"{seed:>3} " + "".join(str(min(9, int(r * 10))) for r in row))
+
+    test, env, net = experiment.test, experiment.env, experiment.net
+    owner = np.repeat(np.arange(config.num_seeds), config.num_test_tasks)
+    greedy = episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
+    keys = jax.random.split(jax.random.key(123), len(owner))
+    result, records = rollout(env, experiment.test_bridge, greedy, test.tasks, test.tables, test.horizons, keys,
+                              test.max_steps, record=True, controls=experiment.approach.controls)
+    names = env.skill_names + ("CallPlanner",)
+    success = np.asarray(result.success)
+    decided = np.asarray(records.decided & records.live)
+    print(f"final greedy test solve rate per seed: {success.reshape(config.num_seeds, -1).mean(1).tolist()}")
+    for s in range(config.num_seeds):
+        failed = [i for i in range(s * config.num_test_tasks, (s + 1) * config.num_test_tasks) if not success[i]]
+        for i in failed[: args.max_failed]:
+            params = jax.tree.map(lambda x: x[s], learners.params)
+            steps = np.flatnonzero(decided[:, i])
+            print(f"seed {config.seeds[s]} task {i % config.num_test_tasks} ({len(test.specs[i].cups) if hasattr(test.specs[i], 'cups') else ''}"
+                  f" cups): {len(steps)} decisions, {int(result.steps[i])} steps")
+            for t in steps[: args.max_decisions]:
+                f = records.features[t, i]
+                g = np.asarray(records.num_ground[t, i])
+                k, p = int(records.skill[t, i]), float(records.param[t, i])
+                q = float(net.apply(params, encode(env, f, jnp.int32(k), jnp.float32(p))))
+                q_cp = float(net.apply(params, encode(env, f, jnp.int32(env.num_skills), jnp.float32(0))))
+                print(f"  t={t:3d} {names[k]:>17} p={p:+.2f} Q={q:.3f} Q(CP)={q_cp:.3f} "
+                      f"f={np.round(np.asarray(f), 3).tolist()} ground={g.tolist()}")
+
+
+if __name__ == "__main__":
+    main()
