@@ -57,11 +57,12 @@ def main() -> None:
     print(f"final greedy test solve rate per seed: {success.reshape(config.num_seeds, -1).mean(1).tolist()}")
     for s in range(config.num_seeds):
         failed = [i for i in range(s * config.num_test_tasks, (s + 1) * config.num_test_tasks) if not success[i]]
+        params = jax.tree.map(lambda x, s=s: x[s], learners.params)
         for i in failed[: args.max_failed]:
-            params = jax.tree.map(lambda x: x[s], learners.params)
             steps = np.flatnonzero(decided[:, i])
-            print(f"seed {config.seeds[s]} task {i % config.num_test_tasks} ({len(test.specs[i].cups) if hasattr(test.specs[i], 'cups') else ''}"
-                  f" cups): {len(steps)} decisions, {int(result.steps[i])} steps")
+            cups = f" ({len(test.specs[i].cups)} cups)" if hasattr(test.specs[i], "cups") else ""
+            print(f"seed {config.seeds[s]} task {i % config.num_test_tasks}{cups}: {len(steps)} decisions, "
+                  f"{int(result.steps[i])} steps")
             for t in steps[: args.max_decisions]:
                 f = records.features[t, i]
                 g = np.asarray(records.num_ground[t, i])
