@@ -14,36 +14,60 @@ import numpy as np
 
 from jaxbridge.config import TrainConfig
 from jaxbridge.devices import SeedMesh, select_devices
-from jaxbridge.online import build_experiment, init_learners, make_cycle
+from jaxbridge.online import Experiment, build_experiment, init_learners, make_cycle
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
-    parser.add_argument("--num-seeds", type=int, default=16, help="seeds (default: %(default)s)")
-    parser.add_argument("--first-seed", type=int, default=8, help="first seed (default: %(default)s)")
-    parser.add_argument("--cycles", type=int, default=40, help="cycles (default: %(default)s)")
+def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cycles: int) -> argparse.ArgumentParser:
+    """The flags shared by the sweep-like scripts: which seeds, how long, and config overrides."""
+    parser = argparse.ArgumentParser(description=description, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default=env, help="environment (default: %(default)s)")
+    parser.add_argument("--num-seeds", type=int, default=num_seeds, help="seeds (default: %(default)s)")
+    parser.add_argument("--first-seed", type=int, default=first_seed, help="first seed (default: %(default)s)")
+    parser.add_argument("--cycles", type=int, default=cycles, help="cycles (default: %(default)s)")
     parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value (booleans: True/False)")
-    args = parser.parse_args()
-    devices = select_devices("auto")  # as train.py: the seeds over every core; results do not depend on it
+    return parser
+
+
+def swept_config(args) -> tuple[TrainConfig, dict]:
+    """The env's config for the chosen seeds and cycles with the overrides applied, and the overrides."""
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
     changes = {}
     for item in args.overrides:
         name, value = item.split("=", 1)
         kind = type(getattr(config, name))
         changes[name] = value == "True" if kind is bool else kind(value)
-    config = dataclasses.replace(config, **changes)
-    start = time.perf_counter()
+    return dataclasses.replace(config, **changes), changes
+
+
+def train_seeds(config: TrainConfig) -> tuple[Experiment, object, np.ndarray]:
+    """Train every seed of `config` over every device (as train.py; results do not depend on it), without
+    run files. Returns the experiment, the final learners (one device) and the test solve rates
+    float[seeds, cycles]."""
+    seeds = SeedMesh(config.num_seeds, tuple(select_devices("auto")))
     experiment = build_experiment(config)
-    seeds = SeedMesh(config.num_seeds, tuple(devices))
     learners, cycle = seeds.place(init_learners(experiment)), make_cycle(experiment, seeds)
     rates = []
     for _ in range(config.cycles):
         learners, metrics = cycle(learners)
         rates.append(np.asarray(seeds.unpad(metrics).test_solve_rate))
-    rates = np.array(rates).T
-    for seed, row in zip(config.seeds, rates):
+    return experiment, seeds.unpad(learners), np.array(rates).T
+
+
+def print_digits(seeds: list[int], rates: np.ndarray) -> None:
+    for seed, row in zip(seeds, rates):
         print(f"{seed:>3} " + "".join(str(min(9, int(r * 10))) for r in row))
+
+
+def main() -> None:
+    parser = sweep_parser(__doc__, "light_switch_door", 16, 8, 40)
+    parser.add_argument("--save", help="also save the rates, float[seeds, cycles], to this .npy file")
+    args = parser.parse_args()
+    config, changes = swept_config(args)
+    start = time.perf_counter()
+    _, _, rates = train_seeds(config)
+    if args.save:
+        np.save(args.save, rates)
+    print_digits(config.seeds, rates)
     mean = rates.mean(0)
     print(f"overrides {changes or 'none'}: {time.perf_counter() - start:.0f} s; mean every 5 cycles "
           f"{mean[4::5].round(2).tolist()}; min mean from cycle 30: {mean[29:].min():.3f}; "

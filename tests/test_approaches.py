@@ -152,5 +152,8 @@ def test_env_defaults_sit_between_the_paper_defaults_and_explicit_overrides():
     doorknobs = TrainConfig.for_env("doorknobs")
     assert doorknobs.env == "doorknobs" and doorknobs.call_planner_bonus == 0.5
     assert TrainConfig.for_env("doorknobs", call_planner_bonus=0.0).call_planner_bonus == 0.0
+    coffee = TrainConfig.for_env("coffee")
+    assert coffee.updates_per_cycle == 250 and coffee.call_planner_bonus == 0.0
+    assert TrainConfig.for_env("coffee", updates_per_cycle=1000).updates_per_cycle == 1000
     with pytest.raises(ValueError, match="unknown env"):
         TrainConfig.for_env("nowhere")

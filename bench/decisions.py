@@ -1,0 +1,57 @@
+"""Why a trained bridge fails: train seeds with config overrides (as bench.sweep), then print the greedy
+bridge's decisions on the test tasks it does not solve (step, skill, parameter, features, applicable
+actions, Q of the pick and of CallPlanner) and the cycle's test solve rates.
+
+    python -m bench.decisions --env coffee --first-seed 0 --num-seeds 8 --cycles 40 updates_per_cycle=250
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from bench.sweep import print_digits, sweep_parser, swept_config, train_seeds
+from jaxbridge.meta_policy import rollout
+from jaxbridge.online import episode_params
+from jaxbridge.q_bridge import encode
+
+
+def main() -> None:
+    parser = sweep_parser(__doc__, "coffee", 8, 0, 40)
+    parser.add_argument("--max-failed", type=int, default=3, help="failed tasks printed per seed")
+    parser.add_argument("--max-decisions", type=int, default=12, help="decisions printed per failed task")
+    args = parser.parse_args()
+    config, _ = swept_config(args)
+    experiment, learners, rates = train_seeds(config)
+    print_digits(config.seeds, rates)
+
+    test, env, net = experiment.test, experiment.env, experiment.net
+    owner = np.repeat(np.arange(config.num_seeds), config.num_test_tasks)
+    greedy = episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
+    keys = jax.random.split(jax.random.key(123), len(owner))
+    result, records = rollout(env, experiment.test_bridge, greedy, test.tasks, test.tables, test.horizons, keys,
+                              test.max_steps, record=True, controls=experiment.approach.controls)
+    names = env.skill_names + ("CallPlanner",)
+    success = np.asarray(result.success)
+    decided = np.asarray(records.decided & records.live)
+    print(f"final greedy test solve rate per seed: {success.reshape(config.num_seeds, -1).mean(1).tolist()}")
+    for s in range(config.num_seeds):
+        failed = [i for i in range(s * config.num_test_tasks, (s + 1) * config.num_test_tasks) if not success[i]]
+        params = jax.tree.map(lambda x, s=s: x[s], learners.params)
+        for i in failed[: args.max_failed]:
+            steps = np.flatnonzero(decided[:, i])
+            cups = f" ({len(test.specs[i].cups)} cups)" if hasattr(test.specs[i], "cups") else ""
+            print(f"seed {config.seeds[s]} task {i % config.num_test_tasks}{cups}: {len(steps)} decisions, "
+                  f"{int(result.steps[i])} steps")
+            for t in steps[: args.max_decisions]:
+                f = records.features[t, i]
+                g = np.asarray(records.num_ground[t, i])
+                k, p = int(records.skill[t, i]), float(records.param[t, i])
+                q = float(net.apply(params, encode(env, f, jnp.int32(k), jnp.float32(p))))
+                q_cp = float(net.apply(params, encode(env, f, jnp.int32(env.num_skills), jnp.float32(0))))
+                print(f"  t={t:3d} {names[k]:>17} p={p:+.2f} Q={q:.3f} Q(CP)={q_cp:.3f} "
+                      f"f={np.round(np.asarray(f), 3).tolist()} ground={g.tolist()}")
+
+
+if __name__ == "__main__":
+    main()
