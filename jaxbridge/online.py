@@ -168,10 +168,18 @@ class Cycle:
         self._real = self.seeds.real()
         # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical
         # fault during a cycle can still checkpoint the last good one.
-        self._run = jax.jit(self.seeds.map_seeds(make_seed_cycle(experiment)))
+        # out_shardings: the learners come back laid out as they went in. Left to XLA, a 1-device mesh
+        # returns some leaves replicated (PartitionSpec()) instead of split over the seed axis: the same
+        # memory, but a different jit cache key, so the second cycle compiled the whole program again.
+        self._run = jax.jit(self.seeds.map_seeds(make_seed_cycle(experiment)), out_shardings=self.seeds.sharding)
 
     def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
         return self._run(self._real, learners, *self._inputs)
+
+    def cache_size(self) -> int:
+        """Programs compiled for this cycle so far (1 after any number of cycles: the learners keep
+        their shapes, dtypes and placement)."""
+        return self._run._cache_size()
 
 
 def make_cycle(experiment: Experiment, seeds: SeedMesh | None = None) -> Cycle:
