@@ -77,8 +77,8 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
                     "compile_events": first.as_dict(), "measured_cycles": cycles,
                     "steady_s_per_cycle": round(statistics.median(run["times"][1:]), 4),
                     "cycle_times_s": [round(t, 4) for t in run["times"]],
-                    "programs_compiled_after_first_cycle": later.compiles,
-                    "jit_cache_entries": run["cycle"].cache_size(), "mean_test_solve_rate": run["rates"]}
+                    "programs_compiled_after_first_cycle": later.compiles, "traces_after_first_cycle": later.traces,
+                    "mean_test_solve_rate": run["rates"]}
     out["rss_after_cycles_mib"] = round(rss_mib(), 1)
 
     r = measure_updates(run["experiment"], run["seeds"], run["learners"], config.updates_per_cycle, update_repeats)

@@ -9,8 +9,8 @@ environment (the tests set one) is left as it is.
 What the cache cannot hold: JAX does not write programs that contain host callbacks (their Python
 function pointers differ between processes). The training cycle and every meta-policy rollout contain
 one, the host planner behind the plan tables (planner/tables.py, a `jax.pure_callback` taken only on a
-table miss), so those are compiled afresh in every process; the cache serves the smaller programs
-around them (learner initialisation, placing seeds on devices, checkpoint restore, ...). See
+table miss), so those are compiled afresh in every process; the cache serves the ~136 smaller programs
+around them (learner initialisation, random draws, placing seeds on devices, checkpoint restore, ...). See
 docs/PERFORMANCE.md for the measured effect.
 """
 from __future__ import annotations
@@ -22,9 +22,10 @@ from pathlib import Path
 
 import jax
 
-# Programs that compile faster than this are not written (JAX's default is 1 s; ours: most of the small
-# programs around a cycle take 0.1-1 s each and add up over a run's start).
-MIN_COMPILE_SECS = 0.2
+# Programs that compile faster than this are not written. JAX's default is 1 s, which keeps nothing of a
+# train.py run but the uncacheable cycle; its ~136 other programs take 0.01-1 s each, ~10 s together on
+# the 2-core machine, and all of them come back from the cache in ~0.4 s (docs/PERFORMANCE.md).
+MIN_COMPILE_SECS = 0.0
 
 BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
 TRACE = "/jax/core/compile/jaxpr_trace_duration"
@@ -67,18 +68,25 @@ HELP = ("do not use the persistent compilation cache (default: on, in $JAXBRIDGE
 class CompileEvents:
     """What JAX compiled while a `with record() as events:` block ran: XLA programs built (`compiles`,
     with their seconds; a program loaded from the persistent cache counts too, and also as a
-    `cache_hit`), tracing and lowering seconds. Counts every thread's work."""
+    `cache_hit`), functions traced and tracing and lowering seconds. Counts every thread's work.
+    (A jitted function's `_cache_size()` is no substitute: its dispatch cache can gain an entry
+    without any tracing or compiling, measured with the cycle on 2 devices.)"""
 
     def __init__(self):
         self.compiles = 0
         self.compile_s = 0.0
+        self.programs: list[tuple[str, float]] = []  # (function name, seconds) of each XLA build
+        self.traces = 0
         self.trace_s = 0.0
         self.lower_s = 0.0
         self.cache_hits = 0
 
     def as_dict(self) -> dict:
-        return {"compiles": self.compiles, "compile_s": round(self.compile_s, 3), "trace_s": round(self.trace_s, 3),
+        return {"compiles": self.compiles, "compile_s": round(self.compile_s, 3), "traces": self.traces, "trace_s": round(self.trace_s, 3),
                 "lower_s": round(self.lower_s, 3), "cache_hits": self.cache_hits}
+
+    def slowest(self, n: int = 5) -> list[tuple[str, float]]:
+        return sorted(self.programs, key=lambda p: -p[1])[:n]
 
     @property
     def fresh(self) -> int:
@@ -91,13 +99,15 @@ _lock = threading.Lock()
 _registered = False
 
 
-def _on_duration(event: str, duration: float, **_) -> None:
+def _on_duration(event: str, duration: float, fun_name: str = "?", **_) -> None:
     with _lock:
         for rec in _active:
             if event == BACKEND_COMPILE:
                 rec.compiles += 1
                 rec.compile_s += duration
+                rec.programs.append((fun_name, duration))
             elif event == TRACE:
+                rec.traces += 1
                 rec.trace_s += duration
             elif event == LOWER:
                 rec.lower_s += duration

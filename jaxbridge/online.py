@@ -176,11 +176,6 @@ class Cycle:
     def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
         return self._run(self._real, learners, *self._inputs)
 
-    def cache_size(self) -> int:
-        """Programs compiled for this cycle so far (1 after any number of cycles: the learners keep
-        their shapes, dtypes and placement)."""
-        return self._run._cache_size()
-
 
 def make_cycle(experiment: Experiment, seeds: SeedMesh | None = None) -> Cycle:
     return Cycle(experiment, seeds)
