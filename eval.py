@@ -19,6 +19,7 @@ import numpy as np
 
 from envs_jax import ENVS
 from jaxbridge.approaches import APPROACHES
+from jaxbridge import compile_cache
 from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
 
 BRIDGE_LABELS = {"oracle": "oracle bridge", "random": "random bridge", "none": "pure planning"}
@@ -57,6 +58,7 @@ def parse_args(argv):
                              "(with 10 tasks per seed, K = 23 is the third seed's task 3); default: the solved task "
                              "of the first seed on which the bridge opened the most doors (the first of those; "
                              "task 0 if none is solved)")
+    parser.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return parser.parse_args(argv)
 
 
@@ -149,6 +151,7 @@ def evaluate_checkpoint(args) -> int:
 def main(argv=None) -> int:
     args = parse_args(argv)
     check_render_args(args)
+    compile_cache.enable(not args.no_compile_cache)  # before anything compiles
     if args.approach is not None and args.run is None:
         raise UsageError("--approach needs an experiment directory to pick the run from")
     if args.run is not None:

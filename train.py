@@ -25,6 +25,7 @@ from pathlib import Path
 
 from envs_jax import ENVS
 from jaxbridge.approaches import APPROACHES
+from jaxbridge import compile_cache
 from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
 from jaxbridge.config import TrainConfig
 from jaxbridge.devices import device_count_arg, select_devices
@@ -92,6 +93,7 @@ def parse_args(argv):
                         "--xla_force_host_platform_device_count=K takes precedence). Seeds need not divide evenly. "
                         "Results do not depend on it (default: %(default)s)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
+    p.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return p.parse_args(argv)
 
 
@@ -124,6 +126,7 @@ def main(argv=None) -> int:
         devices = select_devices(args.devices)  # before anything starts JAX (CPU device count)
     except ValueError as err:
         raise UsageError(str(err)) from None
+    compile_cache.enable(not args.no_compile_cache)  # before anything compiles
     import time
     from jaxbridge.checkpoint import CheckpointError
     from jaxbridge.experiments import is_experiment_dir, load_experiment, train_approaches

@@ -1,6 +1,6 @@
-"""Env steps per second of the meta-policy (planner + oracle bridge) on Light Switch Door test tasks.
+"""Env steps per second of the meta-policy (planner + oracle bridge) on an env's test tasks.
 
-    python -m bench.meta_policy [--repeats 30]
+    python -m bench.meta_policy [--env light_switch_door] [--repeats 30]
 
 Counts only steps that episodes really take (finished episodes idle until the longest one ends).
 Prints compile time and the median over repeats of steady-state throughput.
@@ -13,11 +13,10 @@ import time
 
 import jax
 
-from envs_jax import light_switch_door as lsd
-from envs_jax.light_switch_door import LightSwitchDoor
+from envs_jax import ENVS
 from jaxbridge.bridges import make_bridge
 from jaxbridge.meta_policy import rollout
-from jaxbridge.tasks import evaluation_batch, make_batch
+from jaxbridge.tasks import evaluation_batch
 
 
 def measure(batch, repeats: int) -> dict:
@@ -42,19 +41,25 @@ def measure(batch, repeats: int) -> dict:
                 median_ms=median * 1e3, steps_per_s=steps / median)
 
 
+def cases(env_cls, full: bool = True) -> dict:
+    """The batches measured: one episode, (1 seed x 10 tasks,) 8 seeds x 10 tasks."""
+    out = {"1 seed x 1 task": evaluation_batch(env_cls, [0], 1)}
+    if full:
+        out["1 seed x 10 tasks"] = evaluation_batch(env_cls, [0])
+    out["8 seeds x 10 tasks"] = evaluation_batch(env_cls, list(range(8)))
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=30, help="timed rollouts per case (default: %(default)s)")
+    parser.add_argument("--env", default="light_switch_door", choices=sorted(ENVS),
+                        help="environment (default: %(default)s)")
     args = parser.parse_args()
-    cases = {
-        "1 episode (seed 0, task 0)": make_batch(LightSwitchDoor, [lsd.test_tasks(0)[0]], [0]),
-        "1 seed x 10 tasks": evaluation_batch(LightSwitchDoor, [0]),
-        "8 seeds x 10 tasks": evaluation_batch(LightSwitchDoor, list(range(8))),
-    }
     print(f"jax {jax.__version__}, devices: {jax.devices()}")
     print(f"{'case':<28} {'episodes':>8} {'env steps':>9} {'solved':>6} {'compile s':>9} {'ms/rollout':>10} "
           f"{'env steps/s':>12}")
-    for name, batch in cases.items():
+    for name, batch in cases(ENVS[args.env]).items():
         r = measure(batch, args.repeats)
         print(f"{name:<28} {r['episodes']:>8} {r['steps']:>9} {r['solved']:>6.2f} {r['compile_s']:>9.2f} "
               f"{r['median_ms']:>10.2f} {r['steps_per_s']:>12,.0f}")

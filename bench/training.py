@@ -22,6 +22,37 @@ from jaxbridge.online import build_experiment, init_learners, make_cycle
 AUTHORS_WHOLE_RUN_S = {"light_switch_door": 17_572, "doorknobs": 21_118, "coffee": 13_900}
 
 
+def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None) -> dict:
+    """Build `config`'s experiment with the seeds over `devices` and run `cycles` cycles (default:
+    config.cycles). Returns the times (build, each cycle), what JAX compiled in the first cycle and in
+    the later ones (jaxbridge.compile_cache.CompileEvents), each cycle's mean test solve rate, and the
+    experiment, seed layout and final learners (for further measurements)."""
+    from jaxbridge import compile_cache
+
+    start = time.perf_counter()
+    experiment = build_experiment(config)
+    seeds = SeedMesh(config.num_seeds, tuple(devices))
+    learners = seeds.place(init_learners(experiment))
+    cycle = make_cycle(experiment, seeds)
+    built = time.perf_counter()
+    times, rates = [], []
+
+    def one(learners):
+        t0 = time.perf_counter()
+        learners, metrics = cycle(learners)
+        rates.append(float(np.asarray(seeds.unpad(metrics).test_solve_rate).mean()))
+        times.append(time.perf_counter() - t0)
+        return learners
+
+    with compile_cache.record() as first:
+        learners = one(learners)
+    with compile_cache.record() as later:  # the later cycles' compilations (none: the cycle compiles once)
+        for _ in range((cycles or config.cycles) - 1):
+            learners = one(learners)
+    return {"build_s": built - start, "times": times, "rates": rates, "first": first, "later": later,
+            "total_s": time.perf_counter() - start, "experiment": experiment, "seeds": seeds, "learners": learners, "cycle": cycle}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
@@ -31,27 +62,16 @@ def main() -> None:
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles)
-    start = time.perf_counter()
-    experiment = build_experiment(config)
-    seeds = SeedMesh(config.num_seeds, tuple(seeds_over))
-    learners = seeds.place(init_learners(experiment))
-    cycle = make_cycle(experiment, seeds)
-    built = time.perf_counter()
-    times, rates = [], []
-    for _ in range(config.cycles):
-        t0 = time.perf_counter()
-        learners, metrics = cycle(learners)
-        rates.append(float(np.asarray(seeds.unpad(metrics).test_solve_rate).mean()))
-        times.append(time.perf_counter() - t0)
-    total = time.perf_counter() - start
+    run = measure_cycles(config, seeds_over)
+    times, total = run["times"], run["total_s"]
     steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
     per_seed_run = total / config.num_seeds
     print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s)")
     print(f"{config.env}: {config.num_seeds} seeds x {config.cycles} cycles, {config.updates_per_cycle} updates/cycle, "
           f"batch {config.batch_size}")
-    print(f"tasks + plan tables: {built - start:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "
+    print(f"tasks + plan tables: {run['build_s']:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "
           f"steady state: {steady:.3f} s/cycle")
-    print(f"total: {total:.1f} s; final mean test solve rate {rates[-1]:.2f}")
+    print(f"total: {total:.1f} s; final mean test solve rate {run['rates'][-1]:.2f}")
     authors = AUTHORS_WHOLE_RUN_S[config.env]
     print(f"authors: {authors:,} s per seed-run; ours: {per_seed_run:.1f} s per seed-run "
           f"-> {authors / per_seed_run:,.0f}x")

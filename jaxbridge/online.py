@@ -168,7 +168,10 @@ class Cycle:
         self._real = self.seeds.real()
         # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical
         # fault during a cycle can still checkpoint the last good one.
-        self._run = jax.jit(self.seeds.map_seeds(make_seed_cycle(experiment)))
+        # out_shardings: the learners come back laid out as they went in. Left to XLA, a 1-device mesh
+        # returns some leaves replicated (PartitionSpec()) instead of split over the seed axis: the same
+        # memory, but a different jit cache key, so the second cycle compiled the whole program again.
+        self._run = jax.jit(self.seeds.map_seeds(make_seed_cycle(experiment)), out_shardings=self.seeds.sharding)
 
     def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
         return self._run(self._real, learners, *self._inputs)
