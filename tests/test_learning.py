@@ -7,9 +7,10 @@ import pytest
 
 from envs_jax import light_switch_door as lsd
 from envs_jax.light_switch_door import LightSwitchDoor
-from jaxbridge import checkpoint
+from jaxbridge import checkpoint, compile_cache
 from jaxbridge.bridges import make_bridge
 from jaxbridge.config import TrainConfig
+from jaxbridge.devices import SeedMesh
 from jaxbridge.dqn import epsilon, init_learner, learn, td_targets
 from jaxbridge.meta_policy import rollout
 from jaxbridge.online import build_experiment, init_learners, make_cycle, smooth
@@ -138,9 +139,9 @@ def test_different_seeds_get_different_networks_and_the_same_seed_the_same():
     assert not np.array_equal(kernel(a), kernel(b)) and np.array_equal(kernel(a), kernel(c))
 
 
-def _train(config):
-    experiment = build_experiment(config)
-    learners, cycle = init_learners(experiment), make_cycle(experiment)
+def _train(config, experiment=None, cycle=None):
+    experiment = experiment or build_experiment(config)
+    learners, cycle = init_learners(experiment), cycle or make_cycle(experiment)
     history = []
     for _ in range(config.cycles):
         learners, metrics = cycle(learners)
@@ -148,17 +149,48 @@ def _train(config):
     return experiment, learners, history
 
 
-def test_the_same_seeds_give_identical_metrics_twice():
-    _, la, ha = _train(TINY)
-    _, lb, hb = _train(TINY)
+@pytest.fixture(scope="module")
+def tiny_twice():
+    """TINY trained twice from scratch with one compiled cycle on one device (compiling is most of a short
+    run's time; identity across processes is checked by the resume tests of test_reliability.py), with
+    the programs traced and compiled during each cycle (jax.monitoring, jaxbridge.compile_cache)."""
+    experiment = build_experiment(TINY)
+    seeds = SeedMesh(TINY.num_seeds)  # one device: where XLA once handed back replicated leaves
+    cycle = make_cycle(experiment, seeds)
+    runs, compiled = [], []
+    for _ in range(2):
+        learners, history = seeds.place(init_learners(experiment)), []
+        for _ in range(TINY.cycles):
+            with compile_cache.record() as record:
+                learners, metrics = cycle(learners)
+                jax.block_until_ready((learners, metrics))
+            compiled.append(record)
+            history.append(jax.tree.map(np.asarray, metrics))
+        runs.append((learners, history))
+    return experiment, seeds, cycle, runs, compiled
+
+
+def test_the_cycle_compiles_once_for_every_cycle_and_run(tiny_twice):
+    """No recompilation between cycles (the persistent cache cannot hide one: the cycle holds the planner's
+    host callback, which JAX never writes to it), and the learners keep their seed layout."""
+    _, seeds, cycle, runs, compiled = tiny_twice
+    assert compiled[0].compiles >= 1 and compiled[0].compile_s > 0
+    assert all(r.compiles == 0 and r.traces == 0 for r in compiled[1:]), [r.compiles for r in compiled]
+    assert cycle._run._cache_size() == 1  # one dispatch entry
+    assert all(x.sharding.is_equivalent_to(seeds.sharding, x.ndim) for x in jax.tree.leaves(runs[-1][0]))
+
+
+def test_the_same_seeds_give_identical_metrics_twice(tiny_twice):
+    _, _, _, ((la, ha), (lb, hb)), _ = tiny_twice
     for ma, mb in zip(ha, hb):
         assert all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(ma), jax.tree.leaves(mb)))
     assert all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(la.params), jax.tree.leaves(lb.params)))
     assert not np.array_equal(ha[-1].loss[0], ha[-1].loss[1])  # the two seeds learn differently
 
 
-def test_checkpoint_round_trip_restores_identical_greedy_actions(tmp_path):
-    experiment, learners, _ = _train(TINY)
+def test_checkpoint_round_trip_restores_identical_greedy_actions(tiny_twice, tmp_path):
+    experiment, seeds, _, ((learners, _), _), _ = tiny_twice
+    learners = seeds.unpad(learners)
     checkpoint.save(tmp_path / "ckpt", 3, learners, {"cycle": 3})
     fresh = init_learners(experiment)
     restored, record, step = checkpoint.restore(tmp_path / "ckpt", fresh)
