@@ -12,9 +12,10 @@ import time
 
 import numpy as np
 
+from bench.training import measure_cycles
 from jaxbridge.config import TrainConfig
-from jaxbridge.devices import SeedMesh, select_devices
-from jaxbridge.online import Experiment, build_experiment, init_learners, make_cycle
+from jaxbridge.devices import select_devices
+from jaxbridge.online import Experiment
 
 
 def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cycles: int) -> argparse.ArgumentParser:
@@ -43,14 +44,8 @@ def train_seeds(config: TrainConfig) -> tuple[Experiment, object, np.ndarray]:
     """Train every seed of `config` over every device (as train.py; results do not depend on it), without
     run files. Returns the experiment, the final learners (one device) and the test solve rates
     float[seeds, cycles]."""
-    seeds = SeedMesh(config.num_seeds, tuple(select_devices("auto")))
-    experiment = build_experiment(config)
-    learners, cycle = seeds.place(init_learners(experiment)), make_cycle(experiment, seeds)
-    rates = []
-    for _ in range(config.cycles):
-        learners, metrics = cycle(learners)
-        rates.append(np.asarray(seeds.unpad(metrics).test_solve_rate))
-    return experiment, seeds.unpad(learners), np.array(rates).T
+    run = measure_cycles(config, select_devices("auto"))
+    return run["experiment"], run["seeds"].unpad(run["learners"]), run["seed_rates"]
 
 
 def print_digits(seeds: list[int], rates: np.ndarray) -> None:
@@ -70,7 +65,8 @@ def main() -> None:
     print_digits(config.seeds, rates)
     mean = rates.mean(0)
     print(f"overrides {changes or 'none'}: {time.perf_counter() - start:.0f} s; mean every 5 cycles "
-          f"{mean[4::5].round(2).tolist()}; min mean from cycle 30: {mean[29:].min():.3f}; "
+          f"{mean[4::5].round(2).tolist()}; min mean from cycle 30: "
+          f"{f'{mean[29:].min():.3f}' if len(mean) >= 30 else 'n/a'}; "
           f"seeds >= 0.9 at the last cycle: {(rates[:, -1] >= 0.9).sum()}/{len(rates)}")
 
 

@@ -25,8 +25,9 @@ AUTHORS_WHOLE_RUN_S = {"light_switch_door": 17_572, "doorknobs": 21_118, "coffee
 def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None) -> dict:
     """Build `config`'s experiment with the seeds over `devices` and run `cycles` cycles (default:
     config.cycles). Returns the times (build, each cycle), what JAX compiled in the first cycle and in
-    the later ones (jaxbridge.compile_cache.CompileEvents), each cycle's mean test solve rate, and the
-    experiment, seed layout and final learners (for further measurements)."""
+    the later ones (jaxbridge.compile_cache.CompileEvents), each cycle's mean test solve rate ("rates")
+    and per seed ("seed_rates", float[seeds, cycles]), and the experiment, seed layout and final
+    learners (for further measurements)."""
     from jaxbridge import compile_cache
 
     start = time.perf_counter()
@@ -35,12 +36,12 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
     learners = seeds.place(init_learners(experiment))
     cycle = make_cycle(experiment, seeds)
     built = time.perf_counter()
-    times, rates = [], []
+    times, seed_rates = [], []
 
     def one(learners):
         t0 = time.perf_counter()
         learners, metrics = cycle(learners)
-        rates.append(float(np.asarray(seeds.unpad(metrics).test_solve_rate).mean()))
+        seed_rates.append(np.asarray(seeds.unpad(metrics).test_solve_rate))
         times.append(time.perf_counter() - t0)
         return learners
 
@@ -49,7 +50,8 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
     with compile_cache.record() as later:  # the later cycles' compilations (none: the cycle compiles once)
         for _ in range((cycles or config.cycles) - 1):
             learners = one(learners)
-    return {"build_s": built - start, "times": times, "rates": rates, "first": first, "later": later,
+    return {"build_s": built - start, "times": times, "rates": [float(r.mean()) for r in seed_rates],
+            "seed_rates": np.array(seed_rates).T, "first": first, "later": later,
             "total_s": time.perf_counter() - start, "experiment": experiment, "seeds": seeds, "learners": learners, "cycle": cycle}
 
 
