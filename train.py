@@ -33,8 +33,8 @@ from jaxbridge.devices import device_count_arg, select_devices
 DEFAULTS = TrainConfig()
 # Flags that set the run's config; --resume takes the saved config instead.
 CONFIG_FLAGS = {"env": "env", "num_seeds": "num_seeds", "first_seed": "first_seed", "cycles": "cycles",
-                "episodes_per_cycle": "episodes_per_cycle", "train_steps": "train_steps", "updates_per_cycle": "updates_per_cycle",
-                "batch_size": "batch_size", "call_planner_bonus": "call_planner_bonus",
+                "episodes_per_cycle": "episodes_per_cycle", "train_steps": "train_steps",
+                "updates_per_cycle": "updates_per_cycle", "batch_size": "batch_size", "call_planner_bonus": "call_planner_bonus",
                 "checkpoint_every": "checkpoint_every"}
 
 

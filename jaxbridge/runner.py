@@ -72,21 +72,19 @@ def check_checkpoint_belongs(config: TrainConfig, run_dir: Path) -> None:
     """Refuse (CheckpointError) a run directory whose latest checkpoint was written by another run: of
     another env or approach, or with another config (its state would not fit, or would mean something
     else). Read from the checkpoint's record before anything is built."""
-    from jaxbridge.checkpoint import CheckpointError
-
     record, step = checkpoint.read_record(run_dir / "checkpoints")
     where = run_dir / "checkpoints" / str(step)
     try:
         saved = TrainConfig.from_dict(record["config"])
     except (KeyError, TypeError, ValueError) as err:
-        raise CheckpointError(f"checkpoint {where} has no readable config ({err}); refusing to load it") from None
+        raise checkpoint.CheckpointError(f"checkpoint {where} has no readable config ({err}); refusing to load it") from None
     if (saved.env, saved.approach) != (config.env, config.approach):
-        raise CheckpointError(f"checkpoint {where} was written by a {saved.env} run of {saved.approach}, but the run "
+        raise checkpoint.CheckpointError(f"checkpoint {where} was written by a {saved.env} run of {saved.approach}, but the run "
                               f"is {config.env} of {config.approach}; refusing to load it")
     differ = [f"{f.name} {getattr(saved, f.name)} there, {getattr(config, f.name)} here"
               for f in dataclasses.fields(config) if getattr(saved, f.name) != getattr(config, f.name)]
     if differ:
-        raise CheckpointError(f"checkpoint {where} was written with another config ({'; '.join(differ)}); "
+        raise checkpoint.CheckpointError(f"checkpoint {where} was written with another config ({'; '.join(differ)}); "
                               f"refusing to load it")
 
 
