@@ -21,7 +21,7 @@ drawn from the skill's sampler: uniform in [param_low, param_high] (equal bounds
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, Callable, ClassVar
 
 import jax
 import jax.numpy as jnp
@@ -63,6 +63,17 @@ class BridgeAction:
     param: jax.Array  # float32
 
 
+@dataclass(frozen=True)
+class NoveltySweep:
+    """An env's generalisation sweep (`eval.py RUN --sweep novelties`): tasks with more and more novelty
+    instances, beyond what the bridge trained and was tested on."""
+
+    counted: str  # what the x axis counts, e.g. "doors to the goal"
+    counts: tuple[int, ...]
+    task: Callable[[np.random.Generator, int], Any]  # a task spec with k of them
+    horizon: Callable[[Any], int]  # the spec's horizon, by the env's rule
+
+
 def idle_call() -> SkillCall:
     return SkillCall(skill=jnp.int32(0), slot=jnp.int32(0), param=jnp.float32(0.0),
                      running=jnp.bool_(False), steps=jnp.int32(0))
@@ -88,6 +99,8 @@ class NoveltyEnv:
     full_state_size: ClassVar[int]
     # Training hyperparameters where this env departs from the paper-wide defaults (TrainConfig.for_env).
     train_defaults: ClassVar[dict] = {}
+    # How eval.py's generalisation sweep grows this env's tasks.
+    novelty_sweep: ClassVar[NoveltySweep]
     # The approaches train.py runs when none are named (None: all six) and why not all.
     default_approaches: ClassVar[tuple[str, ...] | None] = None
     why_not_all: ClassVar[str] = ""
@@ -119,6 +132,12 @@ class NoveltyEnv:
         """bool[...]: ground skills (broadcast shapes) that can start in `state`. Preconditions are
         checked by the planner model; envs whose skills need more (a motion plan) override this."""
         return jnp.ones(jnp.broadcast_shapes(skill.shape, slot.shape), bool)
+
+    @property
+    def full_state_fits(self) -> bool:
+        """Whether `full_state` can hold every object of this env's capacity: its size is fixed by the
+        largest test task, so larger (sweep) tasks are beyond the full-state ablations' input."""
+        return True
 
     # ---- tasks ------------------------------------------------------------------------------------
     def stack_tasks(self, specs: list) -> Any:

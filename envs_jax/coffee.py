@@ -27,7 +27,7 @@ import jax.numpy as jnp
 
 from envs_jax import coffee_skills as skills
 from envs_jax import coffee_world as world
-from envs_jax.base import BridgeAction, NoveltyEnv, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
 from envs_jax.coffee_world import MAX_CUPS, CoffeeTask, State, Task
 from planner.strips import Domain, LiftedOperator, Problem
 
@@ -98,6 +98,7 @@ class Coffee(NoveltyEnv):
     full_state_size: ClassVar[int] = 6 + 5 + 1 + 5 * MAX_CUPS
     domain = DOMAIN
     train_task = staticmethod(world.train_task)
+    novelty_sweep = NoveltySweep("cups", world.SWEEP_CUPS, world.sweep_task, world.sweep_horizon)
     test_tasks = staticmethod(world.test_tasks)
     train_steps = TRAIN_STEPS
     # 250 minibatch updates per cycle instead of 1000 (docs/RESULTS.md, Coffee; 8-seed 100-cycle sweeps of
@@ -111,6 +112,10 @@ class Coffee(NoveltyEnv):
     # neither separates the one near-tie left (CallPlanner at the jug top, where the planner twists with
     # its uniform sampler, against TwistJug then CallPlanner): both end in the same CallPlanner reward.
     train_defaults: ClassVar[dict] = {"updates_per_cycle": 250}
+
+    @property
+    def full_state_fits(self) -> bool:
+        return self.max_cups <= MAX_CUPS
 
     @classmethod
     def for_tasks(cls, specs: list[CoffeeTask]) -> Coffee:

@@ -119,6 +119,19 @@ def test_tasks(seed: int, num_tasks: int = 10) -> list[CoffeeTask]:
     return [sample_task(rng, TEST_CUPS) for _ in range(num_tasks)]
 
 
+SWEEP_CUPS = (1, 2, 3, 4, 5, 6)  # eval.py --sweep: 1..6 cups, beyond the test tasks' 1-4
+SWEEP_STEPS_PER_CUP = 20  # the oracle needs 14-17 more steps per cup (max 101 for 4 cups, 132 for 6)
+
+
+def sweep_task(rng: np.random.Generator, num_cups: int) -> CoffeeTask:
+    return sample_task(rng, (num_cups,))
+
+
+def sweep_horizon(spec: CoffeeTask) -> int:
+    """The test horizon, plus 20 steps for every cup beyond the test tasks' 4."""
+    return spec.horizon + SWEEP_STEPS_PER_CUP * max(0, len(spec.cups) - MAX_CUPS)
+
+
 # ---- device arrays ------------------------------------------------------------------------------------
 @struct.dataclass
 class Task:

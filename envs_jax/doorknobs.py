@@ -22,7 +22,7 @@ from flax import struct
 
 from envs_jax import doorknobs_maps as maps
 from envs_jax import geometry, roadmap
-from envs_jax.base import BridgeAction, NoveltyEnv, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
 from envs_jax.doorknobs_maps import (
     ACTION_MAGNITUDE,
     BOTTOM,
@@ -108,6 +108,20 @@ def _limit(delta: jax.Array) -> jax.Array:
     return delta * jnp.minimum(1.0, ACTION_MAGNITUDE / jnp.maximum(length, 1e-12))
 
 
+# eval.py --sweep: 7x7 maps (12-36 rooms, every door closed) with the goal 1..10 doors from the start.
+# Horizon: the test horizon 200, or 30 steps per door on the way where that is more (the oracle needs
+# at most 16 + 23 per further door: 224 steps for 10 doors, over 20 tasks per count).
+SWEEP_MAP_SIZE, SWEEP_DOORS, SWEEP_STEPS_PER_DOOR = 7, tuple(range(1, 11)), 30
+
+
+def sweep_task(rng: np.random.Generator, doors_to_goal: int) -> DoorknobsTask:
+    return maps.sample_task(rng, SWEEP_MAP_SIZE, doors_to_goal)
+
+
+def sweep_horizon(spec: DoorknobsTask) -> int:
+    return max(spec.horizon, SWEEP_STEPS_PER_DOOR * spec.doors_to_goal)
+
+
 @dataclass(frozen=True)
 class Doorknobs(NoveltyEnv):
     """The env at a fixed capacity: maps of at most `map_size` x `map_size` rooms."""
@@ -122,6 +136,7 @@ class Doorknobs(NoveltyEnv):
     train_task = staticmethod(maps.train_task)
     test_tasks = staticmethod(maps.test_tasks)
     train_steps = TRAIN_STEPS
+    novelty_sweep = NoveltySweep("doors to the goal", SWEEP_DOORS, sweep_task, sweep_horizon)
     # Measured on seeds 0-7 (docs/RESULTS.md, Doorknobs):
     # - call_planner_bonus: the authors' +0.5 when CallPlanner's transition reaches the goal. On a training
     #   map with one door, walking through the opened door reaches the goal room as surely as handing back
@@ -146,6 +161,10 @@ class Doorknobs(NoveltyEnv):
     @classmethod
     def for_tasks(cls, specs: list[DoorknobsTask]) -> Doorknobs:
         return cls(map_size=max(s.size for s in specs))
+
+    @property
+    def full_state_fits(self) -> bool:
+        return self.map_size <= TEST_MAP_SIZE
 
     @property
     def _rooms(self) -> int:

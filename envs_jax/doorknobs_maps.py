@@ -73,19 +73,7 @@ class DoorknobsTask:
     @property
     def doors_to_goal(self) -> int:
         """Doors on a shortest room path from the start to the goal room."""
-        neighbours: dict = {room: [] for room in self.rooms}
-        for door in self.doors:
-            a, b = door_rooms(door)
-            neighbours[a].append(b)
-            neighbours[b].append(a)
-        dist, queue = {self.start_room: 0}, deque([self.start_room])
-        while queue:
-            room = queue.popleft()
-            for n in neighbours[room]:
-                if n not in dist:
-                    dist[n] = dist[room] + 1
-                    queue.append(n)
-        return dist[self.goal_room]
+        return door_distances(self.rooms, self.doors, self.start_room)[self.goal_room]
 
     @property
     def min_steps(self) -> int:
@@ -143,7 +131,34 @@ def door_rooms(door: tuple[int, int, int]) -> tuple[tuple[int, int], tuple[int, 
     return (row, col), ((row + 1, col) if side == BOTTOM else (row, col - 1))
 
 
-def sample_task(rng: np.random.Generator, size: int) -> DoorknobsTask:
+def door_distances(rooms, doors, start: tuple[int, int]) -> dict[tuple[int, int], int]:
+    """{room: doors on a shortest room path from `start`} (breadth-first over the doors)."""
+    neighbours: dict = {room: [] for room in rooms}
+    for door in doors:
+        a, b = door_rooms(door)
+        neighbours[a].append(b)
+        neighbours[b].append(a)
+    dist, queue = {start: 0}, deque([start])
+    while queue:
+        room = queue.popleft()
+        for n in neighbours[room]:
+            if n not in dist:
+                dist[n] = dist[room] + 1
+                queue.append(n)
+    return dist
+
+
+def sample_task(rng: np.random.Generator, size: int, doors_to_goal: int | None = None) -> DoorknobsTask:
+    """A task on a size x size map (the authors' draw order). With `doors_to_goal`, the goal is drawn
+    among the rooms exactly that many doors from the start, and the whole task is redrawn while there is
+    none (the generalisation sweep's tasks)."""
+    while True:
+        task = _sample_task(rng, size, doors_to_goal)
+        if task is not None:
+            return task
+
+
+def _sample_task(rng: np.random.Generator, size: int, doors_to_goal: int | None) -> DoorknobsTask | None:
     grid = sample_room_map(rng, size)
     rooms = [(int(r), int(c)) for r, c in np.argwhere(grid)]
     while True:  # the authors resample everything but the map while the robot starts in collision
@@ -173,7 +188,12 @@ def sample_task(rng: np.random.Generator, size: int) -> DoorknobsTask:
                  float(rng.uniform(cy - START_RADIUS, cy + START_RADIUS)))
         if not _robot_collides(grid, robot, row, col, clutter[rooms.index((row, col))], doors):
             break
-    goals = [r for r in rooms if r != (row, col)]
+    if doors_to_goal is None:
+        goals = [r for r in rooms if r != (row, col)]
+    else:
+        goals = [r for r, d in door_distances(rooms, doors, (row, col)).items() if d == doors_to_goal]
+        if not goals:
+            return None
     goal = goals[int(rng.choice(len(goals)))]
     return DoorknobsTask(size, tuple(rooms), tuple(doors), tuple(mass_friction), tuple(clutter), robot, goal)
 

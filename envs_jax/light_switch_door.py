@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.base import BridgeAction, NoveltyEnv, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
 from planner.strips import Domain, LiftedOperator, Problem
 
 MOVE_TARGET, TURN_TARGET, LIGHT_TARGET = 0.5, 0.75, 0.75  # same_levels=True
@@ -26,6 +26,7 @@ TEST_CELLS_RANGE = (10, 20)  # inclusive
 TEST_DOORS_RANGE = (2, 4)  # inclusive
 TEST_DOOR_CELLS = 9  # test doors are drawn from cells 0..8 (the authors' test_grid_row_num_cells - 1)
 TRAIN_STEPS = 100
+SWEEP_CELLS, SWEEP_DOORS = 60, tuple(range(1, 17))  # eval.py --sweep: 1..16 doors in a row of 60 cells
 
 
 @dataclass(frozen=True)
@@ -77,6 +78,12 @@ def sized_task(rng: np.random.Generator, num_cells: int, num_doors: int) -> Ligh
         raise ValueError(f"need >= 2 cells and 0..cells-1 doors, got {num_cells} cells, {num_doors} doors")
     cells = rng.choice(num_cells - 1, num_doors, replace=False)
     return LightSwitchDoorTask(num_cells, tuple(sorted(int(c) for c in cells)))
+
+
+def sweep_task(rng: np.random.Generator, num_doors: int) -> LightSwitchDoorTask:
+    """A generalisation-sweep task: `num_doors` doors anywhere in a row of 60 cells (training: 5 cells and
+    1 door; test: 10-20 cells, 2-4 doors in the first 9); its horizon is the paper's max(30, h + 5)."""
+    return sized_task(rng, SWEEP_CELLS, num_doors)
 
 
 @struct.dataclass
@@ -153,6 +160,7 @@ class LightSwitchDoor(NoveltyEnv):
     train_task = staticmethod(train_task)
     test_tasks = staticmethod(test_tasks)
     train_steps = TRAIN_STEPS
+    novelty_sweep = NoveltySweep("doors", SWEEP_DOORS, sweep_task, horizon=lambda spec: spec.horizon)
 
     @classmethod
     def for_tasks(cls, specs: list[LightSwitchDoorTask]) -> "LightSwitchDoor":
@@ -263,10 +271,14 @@ class LightSwitchDoor(NoveltyEnv):
                           state.task.turn_target[d]])
         return jnp.concatenate([has[None].astype(jnp.float32), jnp.where(has, door, 0.0)])
 
+    @property
+    def full_state_fits(self) -> bool:
+        return self.max_cells <= self.max_task_cells and self.max_doors <= self.max_task_doors
+
     def full_state(self, state: State) -> jax.Array:
         """Every object's raw features (method.md §4.3, "no feature selection"): robot x; light x,
         level, target; each cell's x; each door's x, keys and targets; absent objects are zeros."""
-        if self.max_cells > self.max_task_cells or self.max_doors > self.max_task_doors:
+        if not self.full_state_fits:
             raise ValueError(f"the full-state observation holds at most {self.max_task_cells} cells and "
                              f"{self.max_task_doors} doors; this env has {self.max_cells} and {self.max_doors}")
         task = state.task
