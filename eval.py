@@ -1,11 +1,18 @@
-"""Evaluate bridge policies on every seed's test tasks and print a table.
+"""Evaluate bridge policies: on every seed's test tasks, side by side, on ever larger tasks, in pictures.
 
     python eval.py runs/light_switch_door                    # the latest checkpoint of the "ours" run
     python eval.py runs/light_switch_door --approach no_callplanner   # ... of another approach
     python eval.py runs/light_switch_door --cells 40 --doors 8   # ... on larger tasks
+    python eval.py runs/doorknobs --sweep novelties          # every approach on 1..10 doors to the goal
+    python eval.py runs/lsd_a runs/lsd_b                     # two runs' checkpoints side by side
+    python eval.py runs/coffee --render episode.png --gif episode.gif   # draw and animate an episode
     python eval.py --env light_switch_door --bridge oracle --num-seeds 8   # a hand-made bridge
-    python eval.py --env doorknobs --bridge oracle --render episode.png      # ... and draw an episode
     python eval.py --env coffee --bridge none --render-task 0 --render plan.png   # pure planning, stuck
+
+The generalisation sweep draws, for each number of novelty instances (Light Switch Door: 1..16 doors in
+60 cells; Doorknobs: 1..10 doors between start and goal on 7x7 maps; Coffee: 1..6 cups), --sweep-tasks
+tasks, the same for every seed and approach, with horizons scaled by the env's rule, and writes
+sweep_novelties.png (solve rate vs count, mean and min-max band over seeds), .md and .csv.
 """
 from __future__ import annotations
 
@@ -29,11 +36,21 @@ BRIDGE_HELP = ("oracle: the env's hand-written novelty fixer; random: a uniforml
 
 def parse_args(argv):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("run", nargs="?", type=Path, default=None,
+    parser.add_argument("runs", nargs="*", type=Path, metavar="RUN",
                         help="an experiment directory written by train.py (or one approach's run directory in "
-                             "it): evaluate the latest checkpoint greedily")
+                             "it): evaluate the latest checkpoint greedily; two RUNs: side by side")
     parser.add_argument("--approach", choices=list(APPROACHES), default=None,
-                        help="with an experiment directory: which approach's run to evaluate (default: ours)")
+                        help="with experiment directories: which approach's run to evaluate (default: ours; "
+                             "--sweep without it takes every approach of the experiment)")
+    parser.add_argument("--sweep", choices=["novelties"], default=None,
+                        help="novelties: evaluate on tasks with 1, 2, ... novelty instances (see above) and "
+                             "plot solve rate against their number")
+    parser.add_argument("--sweep-tasks", type=positive_int, default=10,
+                        help="with --sweep: tasks per novelty count, met by every seed (default: %(default)s)")
+    parser.add_argument("--sweep-seed", type=non_negative_int, default=0,
+                        help="with --sweep: seed of the sweep's task draw (default: %(default)s)")
+    parser.add_argument("--sweep-out", type=Path, default=None, metavar="DIR",
+                        help="with --sweep: where sweep_novelties.png/.md/.csv go (default: the first RUN)")
     parser.add_argument("--cells", type=positive_int, default=None,
                         help="with a run: evaluate on tasks of this many cells (Light Switch Door) instead of the test tasks")
     parser.add_argument("--doors", type=non_negative_int, default=None,
@@ -101,50 +118,133 @@ def run_directory(path: Path, approach: str | None) -> Path:
     if (path / "experiment.json").is_file():
         chosen = path / (approach or "ours")
         if not (chosen / "config.json").is_file():
-            held = sorted(p.name for p in path.iterdir() if (p / "config.json").is_file())
-            raise UsageError(f"{path} holds no {approach or 'ours'} run (it holds: {', '.join(held) or 'none'}); "
-                             f"pick one with --approach")
+            raise UsageError(f"{path} holds no {approach or 'ours'} run (it holds: "
+                             f"{', '.join(held_runs(path)) or 'none'}); pick one with --approach")
         return chosen
     if approach is not None and (path / "config.json").is_file():
         raise UsageError(f"--approach picks a run inside an experiment directory; {path} is a single run")
+    if not (path / "config.json").is_file():
+        raise UsageError(f"{path} is not a run directory (no config.json); train one with train.py")
     return path
 
 
-def evaluate_checkpoint(args) -> int:
-    from jaxbridge.checkpoint import CheckpointError
-    from jaxbridge.evaluate import evaluate_run, format_table, summarise
+def held_runs(experiment: Path) -> list[str]:
+    return sorted(p.name for p in experiment.iterdir() if (p / "config.json").is_file())
 
-    args.run = run_directory(args.run, args.approach)
-    config_path = args.run / "config.json"
-    if not config_path.is_file():
-        raise UsageError(f"{args.run} is not a run directory (no config.json); train one with train.py")
+
+def run_env(run: Path) -> str:
     try:
-        env = json.loads(config_path.read_text())["env"]
+        return json.loads((run / "config.json").read_text())["env"]
     except (ValueError, KeyError):
-        raise UsageError(f"{config_path} is not a valid run config") from None
+        raise UsageError(f"{run / 'config.json'} is not a valid run config") from None
+
+
+def sized_tasks(args, env: str):
+    """--cells/--doors as a task drawer, or None for each seed's test tasks."""
     if (args.cells is None) != (args.doors is None):
         raise UsageError("--cells and --doors go together")
-    sized = None
-    if args.cells is not None:
-        if env != "light_switch_door":
-            raise UsageError(f"--cells/--doors apply to light_switch_door runs only, this run is {env}")
-        from envs_jax import light_switch_door as lsd
-        if args.doors > args.cells - 1:
-            raise UsageError(f"--doors must be at most cells - 1 = {args.cells - 1}, got {args.doors}")
-        sized = lambda rng: lsd.sized_task(rng, args.cells, args.doors)
+    if args.cells is None:
+        return None
+    if env != "light_switch_door":
+        raise UsageError(f"--cells/--doors apply to light_switch_door runs only, this run is {env}")
+    from envs_jax import light_switch_door as lsd
+    if args.doors > args.cells - 1:
+        raise UsageError(f"--doors must be at most cells - 1 = {args.cells - 1}, got {args.doors}")
+    return lambda rng: lsd.sized_task(rng, args.cells, args.doors)
+
+
+def evaluate(args, run: Path):
+    """evaluate_run with its errors as usage errors, and a header line."""
+    from jaxbridge.checkpoint import CheckpointError
+    from jaxbridge.evaluate import evaluate_run
+
+    sized = sized_tasks(args, run_env(run))
     start = time.perf_counter()
     try:
-        config, step, batch, result, policy = evaluate_run(args.run, sized, args.num_tasks, args.rollout_seed)
+        config, step, batch, result, policy = evaluate_run(run, sized, args.num_tasks, args.rollout_seed)
     except (CheckpointError, ValueError) as err:
         raise UsageError(str(err)) from None
     what = f"{args.num_tasks} tasks of {args.cells} cells, {args.doors} doors per seed" if sized else "test tasks"
-    print(f"{args.run}: {config.env}, {config.approach}, checkpoint of cycle {step}, greedy bridge, {what} "
+    print(f"{run}: {config.env}, {config.approach}, checkpoint of cycle {step}, greedy bridge, {what} "
           f"({time.perf_counter() - start:.1f} s including compilation)")
+    return config, step, batch, result, policy
+
+
+def evaluate_checkpoint(args, run: Path) -> int:
+    from jaxbridge.evaluate import format_table, summarise
+
+    config, step, batch, result, policy = evaluate(args, run)
     print(format_table(summarise(batch, result)))
     if args.render is not None:
         check_render_task(args, batch.size)
-        render(args, batch, *policy, result,
-               f"greedy bridge of {config.approach}, cycle {step}")
+        render(args, batch, *policy, result, f"greedy bridge of {config.approach}, cycle {step}")
+    return 0
+
+
+def compare_checkpoints(args, runs: list[Path]) -> int:
+    """The same evaluation of each run, then side by side."""
+    from jaxbridge.evaluate import format_comparison, summarise
+
+    envs = {run_env(run) for run in runs}
+    if len(envs) > 1:
+        raise UsageError(f"side by side needs runs of one env, got {', '.join(sorted(envs))}")
+    columns = {}
+    for run, given in zip(runs, args.runs):
+        _, _, batch, result, _ = evaluate(args, run)
+        columns[str(given)] = summarise(batch, result)
+    print(format_comparison(columns))
+    return 0
+
+
+def sweep_lines(args) -> dict[str, Path]:
+    """The sweep's lines: every approach of a lone experiment directory (unless --approach picks one),
+    else one line per RUN."""
+    from jaxbridge.approaches import get_approach
+
+    if len(args.runs) == 1 and args.approach is None and (args.runs[0] / "experiment.json").is_file():
+        held = held_runs(args.runs[0])
+        if not held:
+            raise UsageError(f"{args.runs[0]} holds no runs yet")
+        order = [a for a in APPROACHES if a in held]
+        return {get_approach(a).label: args.runs[0] / a for a in order}
+    return {str(given): run_directory(given, args.approach) for given in args.runs}
+
+
+def sweep(args) -> int:
+    from jaxbridge.artifacts import write_atomic
+    from jaxbridge.checkpoint import CheckpointError
+    from jaxbridge.evaluate import load_policy
+    from jaxbridge.sweep import evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
+
+    out = args.sweep_out or args.runs[0]
+    if not out.is_dir():
+        raise UsageError(f"--sweep-out: directory {out} does not exist")
+    lines = sweep_lines(args)
+    start = time.perf_counter()
+    try:
+        policies = {label: load_policy(run) for label, run in lines.items()}
+        result = evaluate_sweep(policies, args.sweep_tasks, args.sweep_seed, args.rollout_seed,
+                                progress=lambda label: print(f"  {label} ...", flush=True))
+    except (CheckpointError, ValueError) as err:
+        raise UsageError(str(err)) from None
+    cycles = ", ".join(sorted({f"cycle {p.step}" for p in policies.values()}))
+    title = (f"{result.env}: greedy bridges ({cycles}) on {args.sweep_tasks} tasks per count, "
+             f"{result.counted} 1..{max(result.counts)}")
+    print(f"{title} ({time.perf_counter() - start:.1f} s including compilation)")
+    table = sweep_markdown(result)
+    print(table, end="")
+    unseen = [label for label, rate in result.solve_rate.items() if np.isnan(rate).any()]
+    note = (f"\nn/a: {', '.join(unseen)} sees the full state, sized to the largest test task; larger tasks "
+            f"do not fit its input.\n" if unseen else "")
+    print(note, end="")
+    try:
+        write_atomic(out / "sweep_novelties.png", plot_sweep(result, title))
+        write_atomic(out / "sweep_novelties.md", f"# {title}\n\nTest solve rate, mean [min, max] over seeds.\n\n"
+                     + table + note)
+        write_atomic(out / "sweep_novelties.csv", sweep_csv(result))
+    except OSError as err:
+        raise UsageError(f"cannot write to {out}: {err.strerror or err}") from None
+    print(f"wrote {out / 'sweep_novelties.png'}, .md and .csv")
     return 0
 
 
@@ -152,10 +252,24 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     check_render_args(args)
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles
-    if args.approach is not None and args.run is None:
+    if args.approach is not None and not args.runs:
         raise UsageError("--approach needs an experiment directory to pick the run from")
-    if args.run is not None:
-        return evaluate_checkpoint(args)
+    if args.sweep is None and args.sweep_out is not None:
+        raise UsageError("--sweep-out goes with --sweep")
+    if args.sweep is not None:
+        if not args.runs:
+            raise UsageError("--sweep evaluates trained runs: give an experiment or run directory")
+        if args.render is not None or args.cells is not None:
+            raise UsageError("--sweep draws its own tasks; it does not combine with --render or --cells/--doors")
+        return sweep(args)
+    if len(args.runs) > 2:
+        raise UsageError(f"give one RUN, or two to compare side by side; got {len(args.runs)}")
+    if len(args.runs) == 2:
+        if args.render is not None:
+            raise UsageError("--render draws an episode of one run; give one RUN")
+        return compare_checkpoints(args, [run_directory(r, args.approach) for r in args.runs])
+    if args.runs:
+        return evaluate_checkpoint(args, run_directory(args.runs[0], args.approach))
     from jaxbridge.bridges import make_bridge
     from jaxbridge.evaluate import format_table, run_bridge, summarise
     from jaxbridge.meta_policy import Controls

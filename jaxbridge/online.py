@@ -78,8 +78,13 @@ def build_experiment(config: TrainConfig) -> Experiment:
 
 def init_learners(experiment: Experiment) -> Learner:
     """One learner per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""
-    keys = jnp.stack([jax.random.key(s) for s in experiment.config.seeds])
-    return jax.vmap(partial(init_learner, experiment.train.env, experiment.config))(keys)
+    return seed_learners(experiment.train.env, experiment.config)
+
+
+def seed_learners(train_env, config: TrainConfig) -> Learner:
+    """init_learners from the training env alone (what restoring a checkpoint needs as its template)."""
+    keys = jnp.stack([jax.random.key(s) for s in config.seeds])
+    return jax.vmap(partial(init_learner, train_env, config))(keys)
 
 
 def episode_params(learners: Learner, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:

@@ -14,11 +14,12 @@ import jax
 import numpy as np
 from tqdm import tqdm
 
+from envs_jax import env_class
 from jaxbridge import artifacts, checkpoint
 from jaxbridge.approaches import get_approach
 from jaxbridge.config import TrainConfig
 from jaxbridge.devices import SeedMesh, describe
-from jaxbridge.online import CycleMetrics, Experiment, build_experiment, init_learners, make_cycle
+from jaxbridge.online import CycleMetrics, Experiment, build_experiment, init_learners, make_cycle, seed_learners
 
 
 class Interrupted(Exception):
@@ -170,11 +171,13 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
     return artifacts.summary(done[1], config.seeds, elapsed(), describe(seeds.devices))
 
 
-def load_learners(run_dir: Path) -> tuple[TrainConfig, Experiment, object, int]:
-    """Rebuild a run's experiment and restore its latest learner state."""
+def load_learners(run_dir: Path) -> tuple[TrainConfig, object, int]:
+    """A run's config and latest learner state (with its cycle). Only the training env is built: the
+    template the checkpoint is restored into needs its shapes, not the tasks."""
     config = load_config(run_dir)
     check_checkpoint_belongs(config, run_dir)
-    experiment = build_experiment(config)
-    learners, record, step = checkpoint.restore(run_dir / "checkpoints", init_learners(experiment))
-    return config, experiment, learners, step
+    env_cls = env_class(config.env)
+    train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
+    learners, record, step = checkpoint.restore(run_dir / "checkpoints", seed_learners(train_env, config))
+    return config, learners, step
 
