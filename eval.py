@@ -63,15 +63,20 @@ def parse_args(argv):
                         help="evaluate the test tasks of seeds first-seed .. first-seed+N-1 (default: %(default)s)")
     parser.add_argument("--first-seed", type=non_negative_int, default=0, help="first seed (default: %(default)s)")
     parser.add_argument("--num-tasks", type=positive_int, default=10,
-                        help="test tasks per seed (default: %(default)s, as in the paper)")
+                        help="tasks per seed: of a hand-made bridge's test tasks, or with a RUN of --cells/--doors "
+                             "tasks (a RUN's test tasks are the ones it trained with) (default: %(default)s, as in the paper)")
     parser.add_argument("--rollout-seed", type=non_negative_int, default=0,
                         help="seed of the rollout's randomness (random bridge, skill parameters) (default: %(default)s)")
     parser.add_argument("--render", type=Path, default=None, metavar="PATH.png",
                         help="also draw one evaluated episode to this PNG: the world, the robot's path coloured by "
                              "who was in control (planner, bridge, CallPlanner) and what the bridge fixed (doors it opened; "
                              "Coffee: the jug it twisted, with the arm's height, tilt and wrist over time)")
+    parser.add_argument("--gif", type=Path, default=None, metavar="PATH.gif",
+                        help="also animate the episode --render draws (or, without --render, the one it would "
+                             "pick) to this GIF: one frame per step (at most 120, keeping every change of "
+                             "control), each saying who is in control and which skill runs")
     parser.add_argument("--render-task", type=non_negative_int, default=None, metavar="K",
-                        help="with --render: which episode, an index into all evaluated tasks, seed after seed "
+                        help="with --render/--gif: which episode, an index into all evaluated tasks, seed after seed "
                              "(with 10 tasks per seed, K = 23 is the third seed's task 3); default: the solved task "
                              "of the first seed on which the bridge opened the most doors (the first of those; "
                              "task 0 if none is solved)")
@@ -80,14 +85,16 @@ def parse_args(argv):
 
 
 def check_render_args(args) -> None:
-    if args.render_task is not None and args.render is None:
-        raise UsageError("--render-task picks the episode that --render draws; give --render PATH.png too")
-    if args.render is None:
-        return
-    if args.render.suffix.lower() != ".png":
-        raise UsageError(f"--render writes a PNG image: give a path ending in .png, got {args.render}")
-    if not args.render.parent.is_dir():
-        raise UsageError(f"--render: directory {args.render.parent} does not exist")
+    if args.render_task is not None and args.render is None and args.gif is None:
+        raise UsageError("--render-task picks the episode that --render/--gif draw; give --render PATH.png "
+                         "or --gif PATH.gif too")
+    for flag, path, suffix in (("--render", args.render, ".png"), ("--gif", args.gif, ".gif")):
+        if path is None:
+            continue
+        if path.suffix.lower() != suffix:
+            raise UsageError(f"{flag} writes a {suffix[1:].upper()} image: give a path ending in {suffix}, got {path}")
+        if not path.parent.is_dir():
+            raise UsageError(f"{flag}: directory {path.parent} does not exist")
 
 
 def check_render_task(args, num_tasks: int) -> None:
@@ -97,20 +104,26 @@ def check_render_task(args, num_tasks: int) -> None:
 
 
 def render(args, batch, bridge, bridge_params, controls, result, label: str) -> None:
-    """Re-run the chosen evaluated episode with recording on and draw it to args.render."""
+    """Re-run the chosen evaluated episode with recording on; draw it to args.render, animate it to args.gif."""
+    from jaxbridge.animate import render_gif
     from jaxbridge.artifacts import write_atomic
     from jaxbridge.render import drawer_for, pick_episode, render_episode, trace_episodes
 
     chosen = [args.render_task] if args.render_task is not None else np.flatnonzero(batch.seeds == batch.seeds[0])
     traces = trace_episodes(batch, bridge, bridge_params, chosen, args.rollout_seed, controls, expected=result)
     trace = traces[0] if args.render_task is not None else pick_episode(traces)
-    try:
-        write_atomic(args.render, render_episode(batch.env, trace, label))
-    except OSError as err:
-        raise UsageError(f"cannot write {args.render}: {err.strerror or err}") from None
+    drawn = []
+    for path, draw in ((args.render, render_episode), (args.gif, render_gif)):
+        if path is None:
+            continue
+        try:
+            write_atomic(path, draw(batch.env, trace, label))
+        except OSError as err:
+            raise UsageError(f"cannot write {path}: {err.strerror or err}") from None
+        drawn.append(str(path))
     summary = drawer_for(batch.env).bridge_summary(trace)
     print(f"drew seed {trace.seed}, task {trace.task} ({'solved' if trace.success else 'not solved'} in "
-          f"{trace.steps} steps, {summary}) to {args.render}")
+          f"{trace.steps} steps, {summary}) to {' and '.join(drawn)}")
 
 
 def run_directory(path: Path, approach: str | None) -> Path:
@@ -175,7 +188,7 @@ def evaluate_checkpoint(args, run: Path) -> int:
 
     config, step, batch, result, policy = evaluate(args, run)
     print(format_table(summarise(batch, result)))
-    if args.render is not None:
+    if args.render is not None or args.gif is not None:
         check_render_task(args, batch.size)
         render(args, batch, *policy, result, f"greedy bridge of {config.approach}, cycle {step}")
     return 0
@@ -259,14 +272,14 @@ def main(argv=None) -> int:
     if args.sweep is not None:
         if not args.runs:
             raise UsageError("--sweep evaluates trained runs: give an experiment or run directory")
-        if args.render is not None or args.cells is not None:
-            raise UsageError("--sweep draws its own tasks; it does not combine with --render or --cells/--doors")
+        if args.render is not None or args.gif is not None or args.cells is not None:
+            raise UsageError("--sweep draws its own tasks; it does not combine with --render/--gif or --cells/--doors")
         return sweep(args)
     if len(args.runs) > 2:
         raise UsageError(f"give one RUN, or two to compare side by side; got {len(args.runs)}")
     if len(args.runs) == 2:
-        if args.render is not None:
-            raise UsageError("--render draws an episode of one run; give one RUN")
+        if args.render is not None or args.gif is not None:
+            raise UsageError("--render/--gif draw an episode of one run; give one RUN")
         return compare_checkpoints(args, [run_directory(r, args.approach) for r in args.runs])
     if args.runs:
         return evaluate_checkpoint(args, run_directory(args.runs[0], args.approach))
@@ -285,7 +298,7 @@ def main(argv=None) -> int:
     print(f"{args.env}, bridge = {args.bridge}, {batch.size} test tasks "
           f"({time.perf_counter() - start:.1f} s including compilation)")
     print(format_table(summarise(batch, result)))
-    if args.render is not None:
+    if args.render is not None or args.gif is not None:
         render(args, batch, bridge, None, Controls(), result, BRIDGE_LABELS[args.bridge])
     return 0
 

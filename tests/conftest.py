@@ -1,5 +1,18 @@
+import importlib.util
 import os
+from pathlib import Path
+
+import pytest
 
 # Tests share compiled programs across processes through JAX's persistent cache (faster reruns).
 os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", os.path.join(os.path.dirname(__file__), "..", ".jax_cache"))
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
+
+
+@pytest.fixture(scope="module")
+def eval_main():
+    """eval.py's main(argv), in this process (programs compiled by one call serve the next)."""
+    spec = importlib.util.spec_from_file_location("eval_cli", Path(__file__).resolve().parents[1] / "eval.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.main

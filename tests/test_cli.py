@@ -64,6 +64,65 @@ def test_eval_loads_the_checkpoint(short_run):
     assert "25 cells, 5 doors" in bigger.stdout
 
 
+def all_row(text: str) -> list[str]:
+    return next(line.split() for line in text.splitlines() if line.strip().startswith("all "))
+
+
+def test_side_by_side_matches_the_two_single_evaluations(short_run, eval_main, capsys):
+    experiment = short_run[0]
+    singles = []
+    for approach in ("ours", "pure_planning"):
+        assert eval_main([str(experiment), "--approach", approach]) == 0
+        row = all_row(capsys.readouterr().out)  # all, tasks, solve rate, mean steps, calls, stuck, decisions
+        singles += [row[2], row[3], row[6]]
+    assert eval_main([str(experiment / "ours"), str(experiment / "pure_planning")]) == 0
+    out = capsys.readouterr().out
+    both = all_row(out)[1:]
+    assert [float(v) for v in both] == [float(v) for v in singles]
+    assert float(singles[3]) == 0.0  # pure planning never passes a door
+    seed_rows = [line.split() for line in out.splitlines() if line.strip()[:2] in ("0 ", "1 ")]
+    assert len(seed_rows) == 2 and all(len(row) == 7 for row in seed_rows)
+
+
+def test_sweep_of_an_experiment_has_a_line_per_approach(short_run, eval_main, capsys, tmp_path):
+    argv = [str(short_run[0]), "--sweep", "novelties", "--sweep-tasks", "1", "--sweep-out", str(tmp_path)]
+    assert eval_main(argv) == 0
+    table = (tmp_path / "sweep_novelties.md").read_text()
+    assert "| doors | ours | pure planning |" in table
+    assert table[table.index("| doors"):] in capsys.readouterr().out  # the same table printed
+    rows = [line for line in table.splitlines() if line[:2] == "| " and line[2].isdigit()]
+    assert [int(r.split("|")[1]) for r in rows] == list(range(1, 17))
+    assert all(r.split("|")[3].strip() == "0.00" for r in rows)  # pure planning: no door passed
+    lines = list(csv.DictReader((tmp_path / "sweep_novelties.csv").open()))
+    assert len(lines) == 2 * 2 * 16 and {r["line"] for r in lines} == {"ours", "pure planning"}
+    assert (tmp_path / "sweep_novelties.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_eval_animates_the_episode_to_a_gif(short_run, eval_main, capsys, tmp_path):
+    from PIL import Image
+
+    assert eval_main([str(short_run[0]), "--gif", str(tmp_path / "e.gif"), "--render-task", "1"]) == 0
+    assert "drew seed 0, task 1" in capsys.readouterr().out
+    with Image.open(tmp_path / "e.gif") as gif:
+        assert gif.format == "GIF" and gif.n_frames > 2
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["a", "b", "c"], "give one RUN, or two to compare side by side; got 3"),
+    (["--sweep", "novelties"], "--sweep evaluates trained runs"),
+    (["--sweep-out", "."], "--sweep-out goes with --sweep"),
+    (["RUN", "--sweep", "novelties", "--gif", "e.gif"], "does not combine with --render/--gif"),
+    (["RUN", "RUN", "--render", "e.png"], "draw an episode of one run; give one RUN"),
+    (["RUN", "--sweep", "novelties", "--approach", "random"], "holds no random run (it holds: ours, pure_planning)"),
+])
+def test_eval_rejects_bad_combinations_in_one_line(short_run, eval_main, capsys, argv, message):
+    from jaxbridge.cli import run_main
+    argv = [str(short_run[0]) if a == "RUN" else a for a in argv]
+    assert run_main(eval_main, argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and message in err and err.count("\n") == 1
+
+
 def test_an_existing_run_is_not_overwritten(short_run):
     run_dir = short_run[0]
     proc = run("train.py", "--cycles", "1", "--out", str(run_dir.parent), "--name", "tiny", "--no-progress")

@@ -1,6 +1,7 @@
 """The planner: optimal plan lengths (checked against pyperplan's A* + LM-cut), the compiled tables,
 and the host-callback path behind them."""
 import dataclasses
+import itertools
 
 import jax
 import jax.numpy as jnp
@@ -10,7 +11,10 @@ from pyperplan import search
 from pyperplan.heuristics.lm_cut import LmCutHeuristic
 from pyperplan.planner import search_plan
 
+from envs_jax import doorknobs_maps
 from envs_jax import light_switch_door as lsd
+from envs_jax.coffee import Coffee
+from envs_jax.doorknobs import Doorknobs
 from planner.search import NO_OPERATOR, UNREACHABLE, BitOperator, HostPlanner, optimal_policy
 from planner.strips import domain_pddl, ground, problem_pddl
 from planner.tables import bits_to_words, compile_task, host_lookup, table_lookup, words_to_bits
@@ -110,3 +114,27 @@ def test_unknown_states_miss_the_table_and_the_host_solves_them():
         sum(1 << ENV.atom_index(a) for a in chosen.add)
     assert words_to_bits(np.asarray(nxt[0])) == expected
     assert len(compiled.planner.plan(state)) == len(compiled.planner.plan(expected)) + 1
+
+
+def test_grounding_prunes_by_static_preconditions_without_changing_the_operators():
+    """ground() checks each static atom as soon as its variables are bound; the result must be every
+    binding of the full product whose static preconditions hold, in product order."""
+    def brute_force(problem):
+        fluent, out = problem.domain.fluent_predicates, []
+        for op in problem.domain.operators:
+            variables = [v for v, _ in op.params]
+            choices = [[o for o, t in problem.objects.items() if t == typ] for _, typ in op.params]
+            for values in itertools.product(*choices):
+                bind = dict(zip(variables, values))
+                atoms = lambda atoms: frozenset((a[0],) + tuple(bind.get(x, x) for x in a[1:]) for a in atoms)
+                if atoms(a for a in op.pre if a[0] not in fluent) <= problem.static:
+                    out.append((op.name, tuple(values), atoms(a for a in op.pre if a[0] in fluent),
+                                atoms(op.add), atoms(op.delete)))
+        return out
+
+    rng = np.random.default_rng(0)
+    for env, spec in ((Doorknobs(4), doorknobs_maps.sample_task(rng, 4)), (ENV, lsd.test_tasks(1, 1)[0]),
+                      (Coffee(), Coffee.test_tasks(2, 4)[3])):
+        problem = env.planner_problem(spec)
+        ops = [(op.name, op.args, op.pre, op.add, op.delete) for op in ground(problem)]
+        assert ops == brute_force(problem) and len(ops) > 5

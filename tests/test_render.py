@@ -2,7 +2,6 @@
 episode, the ground skills it records, a valid PNG, eval.py's --render flags; and animation: frame
 captions, which frames are kept, and for each env a GIF of an oracle episode whose frames are all there,
 all of one size, not blank, and move with the robot (one file, so the episodes compile once)."""
-import importlib.util
 import io
 from pathlib import Path
 
@@ -157,17 +156,10 @@ def test_coffee_oracle_episode_shows_the_bridge_twisting_the_jug_and_renders(cof
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and image.shape[0] > 800 and image.shape[1] > 600 and image.std() > 0.05
 
 
-@pytest.fixture(scope="module")
-def eval_main():
-    spec = importlib.util.spec_from_file_location("eval_cli", ROOT / "eval.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.main
-
-
 @pytest.mark.parametrize("argv, message", [
-    (["--render-task", "3"], "--render-task picks the episode that --render draws"),
+    (["--render-task", "3"], "--render-task picks the episode that --render/--gif draw"),
     (["--render", "episode.jpg"], "give a path ending in .png"),
+    (["--gif", "episode.png"], "--gif writes a GIF image: give a path ending in .gif"),
     (["--render", "no/such/dir/episode.png"], "directory no/such/dir does not exist"),
     (["--env", "doorknobs", "--num-seeds", "1", "--num-tasks", "2", "--render", "e.png", "--render-task", "2"],
      "--render-task must be below 2"),
