@@ -7,6 +7,7 @@ shared, so a difference in results is the approach's defining difference and not
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 from envs_jax.base import NoveltyEnv
@@ -27,7 +28,10 @@ class Approach:
     def learns(self) -> bool:
         return self.bridge == "q"
 
+    @functools.lru_cache(maxsize=64)
     def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int) -> Bridge:
+        """The approach's bridge; one object per (env, net, n_sample), so that programs compiled for it
+        (the bridge is a static argument of the rollout) serve every later call with equal arguments."""
         if self.bridge == "q":
             return make_q_bridge(env, net, n_sample)
         return random_bridge(env) if self.bridge == "random" else pure_planning_bridge(env)
