@@ -247,8 +247,8 @@ def sweep(args) -> int:
     table = sweep_markdown(result)
     print(table, end="")
     unseen = [label for label, rate in result.solve_rate.items() if np.isnan(rate).any()]
-    note = (f"\nn/a: {', '.join(unseen)} sees the full state, sized to the largest test task; larger tasks "
-            f"do not fit its input.\n" if unseen else "")
+    note = (f"\nn/a ({', '.join(unseen)}): the full state an approach sees is sized to the largest test task; "
+            f"larger tasks do not fit its input.\n" if unseen else "")
     print(note, end="")
     try:
         write_atomic(out / "sweep_novelties.png", plot_sweep(result, title))

@@ -69,6 +69,7 @@ class NoveltySweep:
     instances, beyond what the bridge trained and was tested on."""
 
     counted: str  # what the x axis counts, e.g. "doors to the goal"
+    setting: str  # the rest of the tasks, e.g. "on 7x7 maps"
     counts: tuple[int, ...]
     task: Callable[[np.random.Generator, int], Any]  # a task spec with k of them
     horizon: Callable[[Any], int]  # the spec's horizon, by the env's rule

@@ -98,7 +98,8 @@ class Coffee(NoveltyEnv):
     full_state_size: ClassVar[int] = 6 + 5 + 1 + 5 * MAX_CUPS
     domain = DOMAIN
     train_task = staticmethod(world.train_task)
-    novelty_sweep = NoveltySweep("cups", world.SWEEP_CUPS, world.sweep_task, world.sweep_horizon)
+    novelty_sweep = NoveltySweep("cups", "to fill after twisting the jug", world.SWEEP_CUPS, world.sweep_task,
+                                 world.sweep_horizon)
     test_tasks = staticmethod(world.test_tasks)
     train_steps = TRAIN_STEPS
     # 250 minibatch updates per cycle instead of 1000 (docs/RESULTS.md, Coffee; 8-seed 100-cycle sweeps of

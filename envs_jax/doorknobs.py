@@ -136,7 +136,8 @@ class Doorknobs(NoveltyEnv):
     train_task = staticmethod(maps.train_task)
     test_tasks = staticmethod(maps.test_tasks)
     train_steps = TRAIN_STEPS
-    novelty_sweep = NoveltySweep("doors to the goal", SWEEP_DOORS, sweep_task, sweep_horizon)
+    novelty_sweep = NoveltySweep("doors to the goal", f"on {SWEEP_MAP_SIZE}x{SWEEP_MAP_SIZE} maps, every door closed",
+                                 SWEEP_DOORS, sweep_task, sweep_horizon)
     # Measured on seeds 0-7 (docs/RESULTS.md, Doorknobs):
     # - call_planner_bonus: the authors' +0.5 when CallPlanner's transition reaches the goal. On a training
     #   map with one door, walking through the opened door reaches the goal room as surely as handing back

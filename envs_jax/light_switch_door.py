@@ -160,7 +160,8 @@ class LightSwitchDoor(NoveltyEnv):
     train_task = staticmethod(train_task)
     test_tasks = staticmethod(test_tasks)
     train_steps = TRAIN_STEPS
-    novelty_sweep = NoveltySweep("doors", SWEEP_DOORS, sweep_task, horizon=lambda spec: spec.horizon)
+    novelty_sweep = NoveltySweep("doors", f"in a row of {SWEEP_CELLS} cells", SWEEP_DOORS, sweep_task,
+                                 horizon=lambda spec: spec.horizon)
 
     @classmethod
     def for_tasks(cls, specs: list[LightSwitchDoorTask]) -> "LightSwitchDoor":

@@ -24,6 +24,7 @@ from jaxbridge.tasks import TaskBatch, make_batch
 class SweepResult:
     env: str
     counted: str  # what the counts count, e.g. "doors"
+    setting: str  # e.g. "in a row of 60 cells"
     counts: tuple[int, ...]
     tasks_per_count: int
     solve_rate: dict[str, np.ndarray]  # line label -> float[seeds, counts]; NaN where the approach cannot see the tasks
@@ -75,7 +76,7 @@ def evaluate_sweep(policies: dict[str, TrainedPolicy], tasks_per_count: int = 10
                 if k in visible:
                     rate[:, j] = success[:, counts[chosen] == k].mean(axis=1)
         rates[label], seeds_of[label] = rate, seeds
-    return SweepResult(env_cls.name, sweep.counted, sweep.counts, tasks_per_count, rates, seeds_of)
+    return SweepResult(env_cls.name, sweep.counted, sweep.setting, sweep.counts, tasks_per_count, rates, seeds_of)
 
 
 def list_of(specs: list, mask: np.ndarray) -> list:
@@ -120,11 +121,12 @@ def plot_sweep(result: SweepResult, title: str) -> bytes:
     ax = fig.add_subplot()
     x = np.asarray(result.counts)
     for label, rate in result.solve_rate.items():
-        if np.isnan(rate).all():
+        if np.isnan(rate).all():  # listed, so that a missing line is explained
+            ax.plot([], [], " ", label=f"{label}: n/a (its full-state input is too small)")
             continue
         line, = ax.plot(x, rate.mean(0), marker="o", markersize=3, label=f"{label} ({rate.shape[0]} seeds)")
         ax.fill_between(x, rate.min(0), rate.max(0), color=line.get_color(), alpha=0.2)
-    ax.set_xlabel(f"number of {result.counted}")
+    ax.set_xlabel(f"number of {result.counted} ({result.setting})")
     ax.set_ylabel(f"test solve rate ({result.tasks_per_count} tasks per point and seed)")
     ax.set_xticks(x)
     ax.set_ylim(-0.02, 1.02)

@@ -89,7 +89,7 @@ def test_sweep_groups_episodes_by_seed_and_count_and_marks_what_an_approach_cann
 
 def test_sweep_plot_is_a_png():
     rate = np.array([[1.0, 0.5, 0.0], [1.0, 1.0, 0.5]])
-    result = SweepResult("coffee", "cups", (1, 2, 3), 4, {"ours": rate, "full": np.full_like(rate, np.nan)},
+    result = SweepResult("coffee", "cups", "on the table", (1, 2, 3), 4, {"ours": rate, "full": np.full_like(rate, np.nan)},
                          {"ours": [0, 1], "full": [0, 1]})
     png = plot_sweep(result, "title")
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
