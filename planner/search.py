@@ -30,10 +30,12 @@ class PolicyEntry:
     dist: int  # optimal plan length, UNREACHABLE for a dead end
 
 
-def successors(ops: list[BitOperator], state: int) -> list[tuple[int, int]]:
-    """(operator index, successor) for every applicable operator that changes the state."""
+def successors(ops: list[BitOperator], state: int, candidates: list[int] | None = None) -> list[tuple[int, int]]:
+    """(operator index, successor) for every applicable operator that changes the state, in operator
+    order; `candidates` (sorted indices) may narrow the operators tried to those that can apply."""
     out = []
-    for i, op in enumerate(ops):
+    for i in range(len(ops)) if candidates is None else candidates:
+        op = ops[i]
         if state & op.pre == op.pre:
             nxt = (state & ~op.delete) | op.add
             if nxt != state:
@@ -41,15 +43,33 @@ def successors(ops: list[BitOperator], state: int) -> list[tuple[int, int]]:
     return out
 
 
+def _by_lowest_precondition(ops: list[BitOperator]) -> tuple[list[int], dict[int, list[int]]]:
+    """Operators without preconditions, and the others keyed by their lowest precondition bit: an
+    operator can only apply in a state holding that bit (most states hold few of the model's atoms)."""
+    always, keyed = [], {}
+    for i, op in enumerate(ops):
+        if op.pre == 0:
+            always.append(i)
+        else:
+            keyed.setdefault((op.pre & -op.pre).bit_length() - 1, []).append(i)
+    return always, keyed
+
+
 def reachable(ops: list[BitOperator], root: int) -> dict[int, list[tuple[int, int]]]:
     """Every state reachable from `root` (in breadth-first order) with its outgoing edges."""
+    always, keyed = _by_lowest_precondition(ops)
     graph: dict[int, list[tuple[int, int]]] = {}
     queue = deque([root])
     while queue:
         s = queue.popleft()
         if s in graph:
             continue
-        graph[s] = successors(ops, s)
+        candidates, bits = list(always), s
+        while bits:
+            low = bits & -bits
+            candidates += keyed.get(low.bit_length() - 1, ())
+            bits ^= low
+        graph[s] = successors(ops, s, sorted(candidates))
         queue.extend(n for _, n in graph[s] if n not in graph)
     return graph
 
