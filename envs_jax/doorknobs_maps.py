@@ -9,7 +9,6 @@ x = col, y = size - 1 - row.
 from __future__ import annotations
 
 import functools
-from collections import deque
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -19,6 +18,7 @@ import numpy as np
 from flax import struct
 
 from envs_jax import geometry, roadmap
+from planner.search import breadth_first_distances
 
 # ---- §3.1 constants --------------------------------------------------------------------------------
 ROOM_SIZE = 1.0
@@ -138,14 +138,7 @@ def door_distances(rooms, doors, start: tuple[int, int]) -> dict[tuple[int, int]
         a, b = door_rooms(door)
         neighbours[a].append(b)
         neighbours[b].append(a)
-    dist, queue = {start: 0}, deque([start])
-    while queue:
-        room = queue.popleft()
-        for n in neighbours[room]:
-            if n not in dist:
-                dist[n] = dist[room] + 1
-                queue.append(n)
-    return dist
+    return breadth_first_distances(neighbours, [start])
 
 
 def sample_task(rng: np.random.Generator, size: int, doors_to_goal: int | None = None) -> DoorknobsTask:

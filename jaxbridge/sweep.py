@@ -117,7 +117,7 @@ def plot_sweep(result: SweepResult, title: str) -> bytes:
     highest seed."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(7, 4.2))
+    fig = Figure(figsize=(10, 4.2))
     ax = fig.add_subplot()
     x = np.asarray(result.counts)
     for label, rate in result.solve_rate.items():
@@ -131,7 +131,7 @@ def plot_sweep(result: SweepResult, title: str) -> bytes:
     ax.set_xticks(x)
     ax.set_ylim(-0.02, 1.02)
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower left", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)  # clear of the lines
     ax.set_title(title, fontsize=10)
     fig.tight_layout()
     buffer = io.BytesIO()

@@ -74,6 +74,20 @@ def reachable(ops: list[BitOperator], root: int) -> dict[int, list[tuple[int, in
     return graph
 
 
+def breadth_first_distances(neighbours: dict, sources: list) -> dict:
+    """{node: fewest edges from any of `sources`} over the nodes reachable along `neighbours`, in the
+    order they are reached."""
+    dist = {s: 0 for s in sources}
+    queue = deque(dist)
+    while queue:
+        node = queue.popleft()
+        for n in neighbours[node]:
+            if n not in dist:
+                dist[n] = dist[node] + 1
+                queue.append(n)
+    return dist
+
+
 def optimal_policy(ops: list[BitOperator], goal: int, root: int) -> dict[int, PolicyEntry]:
     """The optimal policy on every state reachable from `root` (insertion order = BFS order)."""
     graph = reachable(ops, root)
@@ -81,14 +95,7 @@ def optimal_policy(ops: list[BitOperator], goal: int, root: int) -> dict[int, Po
     for s, edges in graph.items():
         for _, n in edges:
             parents[n].append(s)
-    dist = {s: 0 for s in graph if s & goal == goal}
-    queue = deque(dist)
-    while queue:
-        s = queue.popleft()
-        for p in parents[s]:
-            if p not in dist:
-                dist[p] = dist[s] + 1
-                queue.append(p)
+    dist = breadth_first_distances(parents, [s for s in graph if s & goal == goal])
     policy = {}
     for s, edges in graph.items():
         d = dist.get(s, UNREACHABLE)
