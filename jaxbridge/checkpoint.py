@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -39,8 +40,19 @@ def _digests(step_dir: Path) -> dict[str, str]:
             for p in sorted(step_dir.rglob("*")) if p.is_file()}
 
 
+# Orbax keeps the id of "the current save" in a process-wide counter, which its background threads
+# read to find their completion signals. Two saves at once (approaches trained in worker threads) can
+# read each other's id and wait for a signal that never comes: measured, both saves hung 300 s and the
+# run died with a TimeoutError. Saves (a few ms at our sizes) therefore take turns.
+_SAVING = threading.Lock()
+
+
 def save(directory: Path, step: int, state: Any, record: dict) -> None:
-    directory = Path(directory)
+    with _SAVING:
+        _save(Path(directory), step, state, record)
+
+
+def _save(directory: Path, step: int, state: Any, record: dict) -> None:
     with _manager(directory) as mgr:
         mgr.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state),
                                                record=ocp.args.JsonSave(record)))

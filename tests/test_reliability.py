@@ -6,6 +6,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -95,6 +96,28 @@ def test_a_non_finite_q_function_stops_the_run_and_keeps_the_last_good_checkpoin
     assert checkpoint.sealed_steps(run_dir / "checkpoints") == [1, 2]
     rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
     assert {r["cycle"] for r in rows} == {"1", "2"}  # the files cover the good cycles only
+
+
+def test_checkpoints_saved_at_once_from_two_threads_all_complete(tmp_path):
+    """Approaches train in worker threads and checkpoint whenever their cycles end; orbax's save is not
+    safe to run twice at once in one process (without the lock in checkpoint.save, one of two
+    concurrent saves failed at once here, and in a real run both hung for 300 s)."""
+    state, errors = {"w": jnp.ones((64, 32))}, []
+
+    def keep_saving(name):
+        try:
+            for step in range(1, 11):
+                checkpoint.save(tmp_path / name, step, state, {"cycle": step})
+        except Exception as err:  # noqa: BLE001 - reported below
+            errors.append(err)
+
+    threads = [threading.Thread(target=keep_saving, args=(name,), daemon=True) for name in ("a", "b")]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    assert not any(t.is_alive() for t in threads) and errors == []
+    assert checkpoint.sealed_steps(tmp_path / "a") == checkpoint.sealed_steps(tmp_path / "b") == [9, 10]
 
 
 def test_a_checkpoint_of_another_config_version_is_refused(uninterrupted, tmp_path):
