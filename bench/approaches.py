@@ -16,11 +16,11 @@ from pathlib import Path
 
 import jax
 
+from bench.training import AUTHORS_WHOLE_RUN_S  # one seed-run of "ours", per env (results.md)
 from jaxbridge.approaches import APPROACHES
 from jaxbridge.config import TrainConfig
 from jaxbridge.experiments import default_workers, train_approaches
 
-AUTHORS_SEED_RUN_S = 17_572  # one seed, one approach, 100 cycles, Light Switch Door "ours" (results.md)
 
 
 def main() -> None:
@@ -46,10 +46,10 @@ def main() -> None:
           f"{args.workers or default_workers(names)} at a time")
     for name, info in summaries.items():
         print(f"  {name:>20}: {info['elapsed_s']:7.1f} s   smooth test reward {info['smooth_reward_final']['mean']:.3f}")
-    seed_runs = len(names) * args.num_seeds
+    seed_runs, authors = len(names) * args.num_seeds, AUTHORS_WHOLE_RUN_S[args.env]
     print(f"total: {total:.1f} s ({total / 60:.1f} min) for {seed_runs} seed-runs; "
-          f"authors: ~{AUTHORS_SEED_RUN_S * seed_runs / 3600:,.0f} CPU-hours at {AUTHORS_SEED_RUN_S:,} s per seed-run "
-          f"-> {AUTHORS_SEED_RUN_S * seed_runs / total:,.0f}x")
+          f"authors: ~{authors * seed_runs / 3600:,.0f} CPU-hours at {authors:,} s per seed-run "
+          f"-> {authors * seed_runs / total:,.0f}x")
     print(results)
     print(json.dumps({"total_s": round(total, 1), "per_approach_s": {k: v["elapsed_s"] for k, v in summaries.items()}}))
 
