@@ -14,8 +14,9 @@ metrics.csv (one row per seed x cycle), summary.json, curves.png and checkpoints
 state), which eval.py loads. Exit codes: 0 done, 2 bad input, 3 numerical fault, 130 interrupted.
 
 Devices: the seeds are sharded over --devices local devices (all GPUs, or on a CPU-only machine one
-virtual CPU device per core), each device training its share of the seeds; the numbers are
-bit-identical whatever the device count, and a run may resume on another count. See docs/PERFORMANCE.md.
+virtual CPU device per core), each device training its share of the seeds; a run may resume on another
+count. The numbers are bit-identical whatever the device count on Light Switch Door and Coffee; on
+Doorknobs they are not yet (docs/RELIABILITY.md). See docs/PERFORMANCE.md.
 """
 from __future__ import annotations
 
