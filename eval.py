@@ -29,6 +29,7 @@ from jaxbridge.approaches import APPROACHES
 from jaxbridge import compile_cache
 from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
 
+SWEEP_TASKS = 10
 BRIDGE_LABELS = {"oracle": "oracle bridge", "random": "random bridge", "none": "pure planning"}
 BRIDGE_HELP = ("oracle: the env's hand-written novelty fixer; random: a uniformly random applicable "
                "action whenever stuck; none: pure planning (re-plan whenever stuck)")
@@ -45,10 +46,10 @@ def parse_args(argv):
     parser.add_argument("--sweep", choices=["novelties"], default=None,
                         help="novelties: evaluate on tasks with 1, 2, ... novelty instances (see above) and "
                              "plot solve rate against their number")
-    parser.add_argument("--sweep-tasks", type=positive_int, default=10,
-                        help="with --sweep: tasks per novelty count, met by every seed (default: %(default)s)")
-    parser.add_argument("--sweep-seed", type=non_negative_int, default=0,
-                        help="with --sweep: seed of the sweep's task draw (default: %(default)s)")
+    parser.add_argument("--sweep-tasks", type=positive_int, default=None,
+                        help=f"with --sweep: tasks per novelty count, met by every seed (default: {SWEEP_TASKS})")
+    parser.add_argument("--sweep-seed", type=non_negative_int, default=None,
+                        help="with --sweep: seed of the sweep's task draw (default: 0)")
     parser.add_argument("--sweep-out", type=Path, default=None, metavar="DIR",
                         help="with --sweep: where sweep_novelties.png/.md/.csv go (default: the first RUN)")
     parser.add_argument("--cells", type=positive_int, default=None,
@@ -229,6 +230,7 @@ def sweep(args) -> int:
     from jaxbridge.evaluate import load_policy
     from jaxbridge.sweep import evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
 
+    args.sweep_tasks = args.sweep_tasks or SWEEP_TASKS
     out = args.sweep_out or args.runs[0]
     if not out.is_dir():
         raise UsageError(f"--sweep-out: directory {out} does not exist")
@@ -236,7 +238,7 @@ def sweep(args) -> int:
     start = time.perf_counter()
     try:
         policies = {label: load_policy(run) for label, run in lines.items()}
-        result = evaluate_sweep(policies, args.sweep_tasks, args.sweep_seed, args.rollout_seed,
+        result = evaluate_sweep(policies, args.sweep_tasks, args.sweep_seed or 0, args.rollout_seed,
                                 progress=lambda label: print(f"  {label} ...", flush=True))
     except (CheckpointError, ValueError) as err:
         raise UsageError(str(err)) from None
@@ -267,8 +269,10 @@ def main(argv=None) -> int:
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles
     if args.approach is not None and not args.runs:
         raise UsageError("--approach needs an experiment directory to pick the run from")
-    if args.sweep is None and args.sweep_out is not None:
-        raise UsageError("--sweep-out goes with --sweep")
+    sweep_flags = {"--sweep-out": args.sweep_out, "--sweep-tasks": args.sweep_tasks, "--sweep-seed": args.sweep_seed}
+    given = [flag for flag, value in sweep_flags.items() if value is not None]
+    if args.sweep is None and given:
+        raise UsageError(f"{given[0]} goes with --sweep")
     if args.sweep is not None:
         if not args.runs:
             raise UsageError("--sweep evaluates trained runs: give an experiment or run directory")

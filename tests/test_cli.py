@@ -111,6 +111,7 @@ def test_eval_animates_the_episode_to_a_gif(short_run, eval_main, capsys, tmp_pa
     (["a", "b", "c"], "give one RUN, or two to compare side by side; got 3"),
     (["--sweep", "novelties"], "--sweep evaluates trained runs"),
     (["--sweep-out", "."], "--sweep-out goes with --sweep"),
+    (["RUN", "--sweep-tasks", "3"], "--sweep-tasks goes with --sweep"),
     (["RUN", "--sweep", "novelties", "--gif", "e.gif"], "does not combine with --render/--gif"),
     (["RUN", "RUN", "--render", "e.png"], "draw an episode of one run; give one RUN"),
     (["RUN", "--sweep", "novelties", "--approach", "random"], "holds no random run (it holds: ours, pure_planning)"),
