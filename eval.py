@@ -17,7 +17,6 @@ sweep_novelties.png (solve rate vs count, mean and min-max band over seeds), .md
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -147,10 +146,12 @@ def held_runs(experiment: Path) -> list[str]:
 
 
 def run_env(run: Path) -> str:
+    from jaxbridge.runner import load_config
+
     try:
-        return json.loads((run / "config.json").read_text())["env"]
-    except (ValueError, KeyError):
-        raise UsageError(f"{run / 'config.json'} is not a valid run config") from None
+        return load_config(run).env
+    except ValueError as err:
+        raise UsageError(str(err)) from None
 
 
 def sized_tasks(args, env: str):

@@ -49,7 +49,6 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
     from jaxbridge import compile_cache
     compile_cache.enable(False)
     import jax
-    import numpy as np
 
     from bench.meta_policy import cases, measure
     from bench.training import measure_cycles

@@ -22,15 +22,13 @@ import numpy as np
 from envs_jax import ENVS, env_class
 from jaxbridge.config import TrainConfig
 from jaxbridge.evaluate import TrainedPolicy, load_policy
-from jaxbridge.online import seed_learners
+from jaxbridge.online import seed_learners, training_env
 from jaxbridge.tasks import evaluation_batch
 
 
 def fresh_policy(env: str, num_seeds: int) -> TrainedPolicy:
     config = TrainConfig.for_env(env, num_seeds=num_seeds)
-    env_cls = env_class(env)
-    train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
-    return TrainedPolicy(config, 0, seed_learners(train_env, config))
+    return TrainedPolicy(config, 0, seed_learners(training_env(config), config))
 
 
 def measure(policy: TrainedPolicy, tasks: int) -> dict:

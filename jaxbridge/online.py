@@ -81,6 +81,12 @@ def init_learners(experiment: Experiment) -> Learner:
     return seed_learners(experiment.train.env, experiment.config)
 
 
+def training_env(config: TrainConfig):
+    """The env sized to the seeds' training tasks: the one the learners' shapes follow."""
+    env_cls = env_class(config.env)
+    return env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
+
+
 def seed_learners(train_env, config: TrainConfig) -> Learner:
     """init_learners from the training env alone (what restoring a checkpoint needs as its template)."""
     keys = jnp.stack([jax.random.key(s) for s in config.seeds])

@@ -14,12 +14,11 @@ import jax
 import numpy as np
 from tqdm import tqdm
 
-from envs_jax import env_class
 from jaxbridge import artifacts, checkpoint
 from jaxbridge.approaches import get_approach
 from jaxbridge.config import TrainConfig
 from jaxbridge.devices import SeedMesh, describe
-from jaxbridge.online import CycleMetrics, Experiment, build_experiment, init_learners, make_cycle, seed_learners
+from jaxbridge.online import CycleMetrics, build_experiment, init_learners, make_cycle, seed_learners, training_env
 
 
 class Interrupted(Exception):
@@ -176,8 +175,6 @@ def load_learners(run_dir: Path) -> tuple[TrainConfig, object, int]:
     template the checkpoint is restored into needs its shapes, not the tasks."""
     config = load_config(run_dir)
     check_checkpoint_belongs(config, run_dir)
-    env_cls = env_class(config.env)
-    train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
-    learners, record, step = checkpoint.restore(run_dir / "checkpoints", seed_learners(train_env, config))
+    learners, record, step = checkpoint.restore(run_dir / "checkpoints", seed_learners(training_env(config), config))
     return config, learners, step
 

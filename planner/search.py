@@ -30,11 +30,11 @@ class PolicyEntry:
     dist: int  # optimal plan length, UNREACHABLE for a dead end
 
 
-def successors(ops: list[BitOperator], state: int, candidates: list[int] | None = None) -> list[tuple[int, int]]:
+def successors(ops: list[BitOperator], state: int, candidates: list[int]) -> list[tuple[int, int]]:
     """(operator index, successor) for every applicable operator that changes the state, in operator
-    order; `candidates` (sorted indices) may narrow the operators tried to those that can apply."""
+    order, trying only `candidates` (sorted indices: every operator that can apply in `state`)."""
     out = []
-    for i in range(len(ops)) if candidates is None else candidates:
+    for i in candidates:
         op = ops[i]
         if state & op.pre == op.pre:
             nxt = (state & ~op.delete) | op.add
