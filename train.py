@@ -36,7 +36,7 @@ DEFAULTS = TrainConfig()
 CONFIG_FLAGS = {"env": "env", "num_seeds": "num_seeds", "first_seed": "first_seed", "cycles": "cycles",
                 "episodes_per_cycle": "episodes_per_cycle", "train_steps": "train_steps",
                 "updates_per_cycle": "updates_per_cycle", "batch_size": "batch_size", "call_planner_bonus": "call_planner_bonus",
-                "checkpoint_every": "checkpoint_every"}
+                "checkpoint_every": "checkpoint_every", "seed_block": "seed_block"}
 
 
 def approach_list(text: str) -> list[str]:
@@ -93,6 +93,11 @@ def parse_args(argv):
                         "virtual CPU device per core (set before JAX starts; XLA_FLAGS="
                         "--xla_force_host_platform_device_count=K takes precedence). Seeds need not divide evenly. "
                         "Results do not depend on it (default: %(default)s)")
+    p.add_argument("--seed-block", type=positive_int,
+                   help="seeds computed side by side (vmapped) on each device; 1 runs them one after another, "
+                        "which is fastest on a CPU and makes each seed's numbers independent of everything else; "
+                        "on a GPU use the seeds per device (e.g. 64) to fill it. Results then depend on the block "
+                        f"(not on --devices) (default: {d.seed_block})")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
     p.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return p.parse_args(argv)
@@ -104,6 +109,8 @@ def make_config(args) -> TrainConfig:
     if config.episodes_per_cycle * config.train_steps > config.buffer_capacity:
         raise UsageError(f"--episodes-per-cycle x {config.train_steps} steps must fit the replay buffer "
                          f"({config.buffer_capacity} transitions)")
+    if config.seed_block > config.num_seeds:
+        raise UsageError(f"--seed-block {config.seed_block} is larger than the {config.num_seeds} seeds")
     env_cls = ENVS[config.env]
     needed = {seed: env_cls.train_task(seed).min_steps for seed in config.seeds}
     worst = max(needed, key=needed.get)

@@ -2,7 +2,7 @@
 (cycles of the two layouts interleaved, so machine noise hits both alike), and a check that both
 layouts give bit-identical metrics and parameters.
 
-    python -m bench.devices [--num-seeds 8] [--cycles 8] [--devices 2]
+    python -m bench.devices [--num-seeds 8] [--cycles 8] [--devices 2] [--seed-block 1]
 
 On a CPU-only machine the N devices are virtual CPU devices (one per core is what train.py's
 `--devices auto` uses).
@@ -22,6 +22,7 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=8, help="cycles per layout, the first one compiles (default: %(default)s)")
     parser.add_argument("--devices", type=int, default=2, help="devices of the sharded layout (default: %(default)s)")
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
+    parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
     args = parser.parse_args()
 
     from jaxbridge.devices import SeedMesh, select_devices
@@ -29,11 +30,11 @@ def main() -> None:
     from jaxbridge.config import TrainConfig
     from jaxbridge.online import build_experiment, init_learners, make_cycle
 
-    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds)
+    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, seed_block=args.seed_block)
     experiment = build_experiment(config)
     layouts = {}
     for n in (1, args.devices):
-        seeds = SeedMesh(config.num_seeds, tuple(devices[:n]))
+        seeds = SeedMesh(config.num_seeds, tuple(devices[:n]), config.seed_block)
         layouts[n] = {"seeds": seeds, "cycle": make_cycle(experiment, seeds),
                       "learners": seeds.place(init_learners(experiment)), "times": [], "metrics": []}
     for _ in range(args.cycles):
@@ -44,7 +45,8 @@ def main() -> None:
             layout["times"].append(time.perf_counter() - t0)
             layout["metrics"].append([np.asarray(x)[: config.num_seeds] for x in jax.tree.leaves(metrics)])
     print(f"jax {jax.__version__}, devices: {devices}")
-    print(f"{config.env}: {config.num_seeds} seeds, {config.updates_per_cycle} updates/cycle, batch {config.batch_size}")
+    print(f"{config.env}: {config.num_seeds} seeds, {config.updates_per_cycle} updates/cycle, batch {config.batch_size}, "
+          f"seed block {config.seed_block}")
     for n, layout in layouts.items():
         print(f"{n} device(s): first cycle (with compilation) {layout['times'][0]:.1f} s; steady state "
               f"{np.median(layout['times'][1:]):.3f} s/cycle (median of {len(layout['times']) - 1})")

@@ -32,7 +32,7 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
 
     start = time.perf_counter()
     experiment = build_experiment(config)
-    seeds = SeedMesh(config.num_seeds, tuple(devices))
+    seeds = SeedMesh(config.num_seeds, tuple(devices), config.seed_block)
     learners = seeds.place(init_learners(experiment))
     cycle = make_cycle(experiment, seeds)
     built = time.perf_counter()
@@ -61,14 +61,15 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
+    parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
-    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles)
+    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles, seed_block=args.seed_block)
     run = measure_cycles(config, seeds_over)
     times, total = run["times"], run["total_s"]
     steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
     per_seed_run = total / config.num_seeds
-    print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s)")
+    print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s), seed block {config.seed_block}")
     print(f"{config.env}: {config.num_seeds} seeds x {config.cycles} cycles, {config.updates_per_cycle} updates/cycle, "
           f"batch {config.batch_size}")
     print(f"tasks + plan tables: {run['build_s']:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "

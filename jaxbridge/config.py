@@ -16,6 +16,10 @@ class TrainConfig:
     no_callplanner, random, pure_planning, maple_q."""
     num_seeds: int = 8
     """Independent seeds, trained together in one vectorised computation."""
+    seed_block: int = 1
+    """Seeds `vmap`ped together on a device (jaxbridge/devices.py). 1: one seed after another, so a
+    seed's numbers depend on nothing else; larger blocks fill a GPU, and then the numbers depend on
+    the block width (never on the device count)."""
     first_seed: int = 0
     """Seeds are first_seed .. first_seed + num_seeds - 1; each draws its own train and test tasks."""
     cycles: int = 100

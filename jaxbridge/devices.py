@@ -10,6 +10,12 @@ is the same whatever the device count (1, 2, many; CPU or GPU) and whatever the 
 `optimization_barrier`s at its edges so that XLA cannot fuse it with the surrounding slicing. Seeds
 are padded (repeating the last seed) to a multiple of the device count; padded slots skip the work
 (a real `cond` on a per-slot flag) and are dropped from the results.
+
+`seed_block` B > 1 trades that for width: each device runs blocks of B seeds `vmap`ped together, one
+block after another. A GPU needs the width (one small seed at a time leaves it nearly idle). The
+numbers then depend on B (the compiled per-block program) but still not on the device count or on
+which seeds share a block; seeds are padded to a multiple of devices x B, and padded slots of a block
+compute alongside the real ones (under `vmap` the `cond` runs both branches) and are dropped.
 """
 from __future__ import annotations
 
@@ -80,6 +86,11 @@ class SeedMesh:
 
     num_seeds: int
     devices: tuple = field(default_factory=lambda: tuple(jax.local_devices()[:1]))
+    block: int = 1  # seeds vmapped together on a device (TrainConfig.seed_block)
+
+    def __post_init__(self):
+        if self.block < 1:
+            raise ValueError(f"seed block must be at least 1, got {self.block}")
 
     @property
     def num_devices(self) -> int:
@@ -87,7 +98,8 @@ class SeedMesh:
 
     @property
     def padded(self) -> int:
-        return -(-self.num_seeds // self.num_devices) * self.num_devices
+        width = self.num_devices * self.block
+        return -(-self.num_seeds // width) * width
 
     @property
     def mesh(self) -> Mesh:
@@ -121,7 +133,8 @@ class SeedMesh:
         """`fn(state, *inputs) -> (state, out)` for one seed, lifted to every seed: the returned
         function takes (real, states, *inputs), each with a leading padded seed axis sharded over the
         devices, and returns (states, outs) likewise. Padded slots return their state unchanged and
-        zero outputs. The per-seed computation compiles to the same code for any device count."""
+        zero outputs. The per-seed (per-block) computation compiles to the same code for any device
+        count."""
 
         def one_seed(args):
             is_real, state, inputs = args
@@ -136,8 +149,14 @@ class SeedMesh:
 
             return jax.lax.cond(is_real, run, skip, state, inputs)
 
+        block = self.block
+
         def per_device(real, states, *inputs):
-            return jax.lax.map(one_seed, (real, states, inputs))
+            if block == 1:
+                return jax.lax.map(one_seed, (real, states, inputs))
+            blocks = jax.tree.map(lambda x: x.reshape((-1, block) + x.shape[1:]), (real, states, inputs))
+            out = jax.lax.map(jax.vmap(one_seed), blocks)
+            return jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:]), out)
 
         spec = PartitionSpec(AXIS)
         return jax.shard_map(per_device, mesh=self.mesh, in_specs=spec, out_specs=spec, check_vma=False)

@@ -12,6 +12,7 @@ from envs_jax.base import NoveltyEnv
 from jaxbridge.approaches import get_approach
 from jaxbridge.config import TrainConfig
 from jaxbridge.meta_policy import observation_size
+from jaxbridge.optim import clipped_adam
 from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
 from jaxbridge.replay import ReplayBuffer, init_buffer, sample_indices
 from jaxbridge.transitions import Transition
@@ -35,7 +36,7 @@ def q_network(config: TrainConfig) -> QNetwork:
 
 
 def make_optimizer(config: TrainConfig) -> optax.GradientTransformation:
-    return optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(config.learning_rate))
+    return clipped_adam(config.grad_clip, config.learning_rate)
 
 
 def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:

@@ -170,9 +170,10 @@ class Cycle:
     depend on the device count."""
 
     def __init__(self, experiment: Experiment, seeds: SeedMesh | None = None):
-        num_seeds = experiment.config.num_seeds
-        self.seeds = seeds or SeedMesh(num_seeds)
-        assert self.seeds.num_seeds == num_seeds
+        config = experiment.config
+        self.seeds = seeds or SeedMesh(config.num_seeds, block=config.seed_block)
+        assert (self.seeds.num_seeds, self.seeds.block) == (config.num_seeds, config.seed_block)
+        num_seeds = config.num_seeds
         train, test = experiment.train, experiment.test
         self._inputs = self.seeds.place(_by_seed((train.tasks, train.tables, train.horizons, test.tasks, test.tables,
                                                   test.horizons), num_seeds))

@@ -48,8 +48,8 @@ class _Member(nn.Module):
     hidden_sizes: Sequence[int]
 
     @nn.compact
-    def __call__(self, x: jax.Array) -> jax.Array:
-        return _mlp(x, self.hidden_sizes)
+    def __call__(self, carry: None, x: jax.Array) -> tuple[None, jax.Array]:
+        return carry, _mlp(x, self.hidden_sizes)
 
 
 class QNetwork(nn.Module):
@@ -76,8 +76,12 @@ class QNetwork(nn.Module):
         if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
             q = _mlp(x, self.hidden_sizes)[None]
         else:
-            q = nn.vmap(_Member, variable_axes={"params": 0}, split_rngs={"params": True}, in_axes=None,
-                        out_axes=0, axis_size=self.ensemble)(self.hidden_sizes)(x)
+            # Members one after another (a scan over their stacked parameters), not vmapped: a member
+            # axis inside the per-seed program made XLA compile the gradient differently with the
+            # number of devices (docs/RELIABILITY.md); each member alone compiles as the plain network.
+            members_scan = nn.scan(_Member, variable_axes={"params": 0}, split_rngs={"params": True},
+                                   in_axes=nn.broadcast, length=self.ensemble)
+            _, q = members_scan(self.hidden_sizes)(None, x)
         return q if members else jnp.min(q, axis=0)
 
 

@@ -111,7 +111,7 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
     if resume:
         check_checkpoint_belongs(config, run_dir)
     experiment = build_experiment(config)
-    seeds = SeedMesh(config.num_seeds, tuple(devices or jax.local_devices()[:1]))
+    seeds = SeedMesh(config.num_seeds, tuple(devices or jax.local_devices()[:1]), config.seed_block)
     learners = init_learners(experiment)
     history: list[CycleMetrics] = []
     elapsed_before = 0.0

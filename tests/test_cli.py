@@ -139,6 +139,8 @@ def test_an_existing_run_is_not_overwritten(short_run):
     (["train.py", "--train-steps", "5"], "--train-steps 5 is too small to ever reach the goal: seed 0's"),
     (["train.py", "--env", "doorknobs", "--first-seed", "1", "--num-seeds", "3", "--train-steps", "11"],
      "seed 2's training task needs at least 12 steps"),
+    (["train.py", "--num-seeds", "3", "--seed-block", "4"], "--seed-block 4 is larger than the 3 seeds"),
+    (["train.py", "--seed-block", "0"], "positive integer"),
     (["eval.py", "--bridge", "clever"], "invalid choice"),
     (["eval.py", "/nonexistent/run"], "not a run directory"),
     (["eval.py", "--num-seeds", "x"], "positive integer"),

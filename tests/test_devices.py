@@ -1,5 +1,6 @@
 """Sharding the seeds over devices does not change a single bit: a short training on 2 virtual CPU
-devices (3 seeds: one padded slot) gives the metrics and parameters of 1 device. (Checkpoints hold the
+devices (3 seeds: one padded slot) gives the metrics and parameters of 1 device, one seed at a time
+or in vmapped seed blocks. (Checkpoints hold the
 unpadded state on one device whatever the count, so a run also resumes on another device count to the
 same numbers: checked by hand, see docs/PERFORMANCE.md; not in the suite, for time.)"""
 import json
@@ -51,8 +52,10 @@ def same(a, b) -> bool:
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
-    # Both at once (each compiles its program on one core for most of its time).
-    procs = [start(*SHORT, "--devices", str(n), "--out", str(out), "--name", f"dev{n}") for n in (1, 2)]
+    # All at once (each compiles its program on one core for most of its time). Seed blocks of 2: one
+    # device runs two blocks (the second with the padded slot), two devices one block each.
+    procs = [start(*SHORT, "--devices", str(n), "--out", str(out), "--name", f"dev{n}{tag}", *block)
+             for n in (1, 2) for tag, block in (("", ()), ("_block2", ("--seed-block", "2")))]
     for proc in procs:
         _, err = proc.communicate(timeout=600)
         assert proc.returncode == 0, err
@@ -66,6 +69,13 @@ def test_two_devices_give_the_metrics_and_parameters_of_one(runs):
     a, b = exact(one), exact(two)
     assert a[0] == 3 and len(a[2]) == 3
     assert same(a, b)
+
+
+def test_seed_blocks_give_the_same_numbers_on_one_and_two_devices(runs):
+    one, two = exact(runs / "dev1_block2" / "ours"), exact(runs / "dev2_block2" / "ours")
+    assert json.loads((runs / "dev1_block2" / "ours" / "config.json").read_text())["seed_block"] == 2
+    assert same(one, two)
+    assert not same(one, exact(runs / "dev1" / "ours"))  # a vmapped block is another program: other numbers
 
 
 def test_bad_device_counts_are_one_line_errors():
@@ -87,6 +97,9 @@ def test_seed_padding_round_trips():
     device = jax.local_devices()[0]
     assert SeedMesh(3, (device,) * 2).pad(np.arange(3)).tolist() == [0, 1, 2, 2]  # padding only needs the count
     assert SeedMesh(4, (device,) * 2).padded == 4 and SeedMesh(3, (device,) * 4).padded == 4
+    assert SeedMesh(3, (device,), block=2).padded == 4 and SeedMesh(5, (device,) * 2, block=2).padded == 8
+    with pytest.raises(ValueError, match="seed block must be at least 1"):
+        SeedMesh(3, (device,), block=0)
     mesh = SeedMesh(3, (device,))
     tree = {"a": np.arange(6.0).reshape(3, 2), "k": jax.random.split(jax.random.key(0), 3)}
     back = mesh.unpad(mesh.place(tree))

@@ -1,0 +1,46 @@
+"""The learner's optimiser: global-norm gradient clipping, then Adam (the paper's; reference/method.md §7).
+
+The arithmetic is optax's `chain(clip_by_global_norm(c), adam(lr))` (optax 0.2.8) operation for
+operation, and so is the state (checkpoints are interchangeable). One thing differs: each division of
+a whole tensor by one of the seed's scalars (the gradient norm, Adam's bias corrections) is made
+elementwise against a materialised divisor. Left as `tensor / scalar`, XLA may compile it as
+`tensor * (1 / scalar)` (one rounding more) in one program and keep the division in another, and
+which one it does changed with the number of devices once seeds were `vmap`ped in blocks
+(jaxbridge/devices.py); a seed's numbers then depended on the device count. A true division rounds the
+same way in every program.
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import optax
+
+B1, B2, EPS = 0.9, 0.999, 1e-8  # Adam's defaults (optax's, PyTorch's)
+
+
+def _divide(tensor: jax.Array, scalar: jax.Array) -> jax.Array:
+    """tensor / scalar as an elementwise division: the barrier hides the broadcast from the simplifier."""
+    divisor = jax.lax.optimization_barrier(jnp.broadcast_to(scalar.astype(tensor.dtype), tensor.shape))
+    return tensor / divisor
+
+
+def clipped_adam(max_norm: float, learning_rate: float) -> optax.GradientTransformation:
+    reference = optax.chain(optax.clip_by_global_norm(max_norm), optax.adam(learning_rate))
+
+    def update(grads, state, params=None):
+        del params
+        clip_state, (adam, scale_state) = state
+        # Clip: rescale the whole gradient to norm max_norm when it is longer.
+        norm = optax.tree.norm(grads)
+        short = norm < max_norm
+        grads = jax.tree.map(lambda g: jax.lax.select(short, g, _divide(g, norm) * max_norm), grads)
+        # Adam: moving moments, bias-corrected, then a step of -learning_rate.
+        mu = jax.tree.map(lambda g, m: (1 - B1) * (g ** 1) + B1 * m, grads, adam.mu)
+        nu = jax.tree.map(lambda g, v: (1 - B2) * (g ** 2) + B2 * v, grads, adam.nu)
+        count = optax.safe_increment(adam.count)
+        mu_hat = jax.tree.map(lambda m: _divide(m, 1 - B1 ** count), mu)
+        nu_hat = jax.tree.map(lambda v: _divide(v, 1 - B2 ** count), nu)
+        step = jax.tree.map(lambda m, v: (-1 * learning_rate) * (m / (jnp.sqrt(v + 0.0) + EPS)), mu_hat, nu_hat)
+        return step, (clip_state, (adam._replace(count=count, mu=mu, nu=nu), scale_state))
+
+    return optax.GradientTransformation(reference.init, update)
