@@ -15,8 +15,9 @@ state), which eval.py loads. Exit codes: 0 done, 2 bad input, 3 numerical fault,
 
 Devices: the seeds are sharded over --devices local devices (all GPUs, or on a CPU-only machine one
 virtual CPU device per core), each device training its share of the seeds; a run may resume on another
-count. The numbers are bit-identical whatever the device count on Light Switch Door and Coffee; on
-Doorknobs they are not yet (docs/RELIABILITY.md). See docs/PERFORMANCE.md.
+count. The numbers are bit-identical whatever the device count. --seed-block B computes B seeds side by
+side on each device (what a GPU needs); the numbers then depend on B, still not on the device count.
+See docs/PERFORMANCE.md.
 """
 from __future__ import annotations
 

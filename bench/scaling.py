@@ -2,18 +2,18 @@
 seeds' tasks and plan tables (host), the first cycle (mostly compilation), the steady-state seconds per
 cycle, and the projected paper protocol (100 cycles) against the authors' run time per seed-run.
 
-    python -m bench.scaling [--env light_switch_door] [--seeds 8,64,256,1024] [--seed-block auto|N]
+    python -m bench.scaling [--env light_switch_door] [--seeds 8,64,256,1024] [--seed-block auto,1,...]
                             [--cycles 3] [--devices auto|N] [--json PATH]
 
 --seed-block auto vmaps all of a device's seeds as one block (what a GPU needs); an integer fixes the
-block width (1: one seed after another, the CPU default of train.py). Each line is printed as soon as
+block width (1: one seed after another, the CPU default of train.py); a list measures each, per seed
+count. Each line is printed as soon as
 it is measured, and --json is rewritten after each, so a run cut short keeps what it measured.
 """
 from __future__ import annotations
 
 import argparse
 import json
-import time
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +32,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--seeds", default="8,64,256,1024", help="seed counts, comma-separated (default: %(default)s)")
-    parser.add_argument("--seed-block", default="auto", help="auto (a device's seeds in one block) or N (default: auto)")
+    parser.add_argument("--seed-block", default="auto", help="auto (a device's seeds in one block) or N, or a "
+                                                               "comma-separated list of them (default: auto)")
     parser.add_argument("--cycles", type=int, default=3, help="cycles timed per seed count, the first compiles "
                                                               "(default: %(default)s)")
     parser.add_argument("--devices", default="auto", help="as train.py (default: auto)")
@@ -49,9 +50,11 @@ def main() -> None:
     print(f"{'seeds':>6} {'block':>6} {'build s':>8} {'first s':>8} {'s/cycle':>8} {'100 cycles s':>13} "
           f"{'s/seed-run':>11} {'x authors':>10}", flush=True)
     rows = []
-    for num_seeds in (int(n) for n in args.seeds.split(",")):
+    counts = [int(n) for n in args.seeds.split(",")]
+    blocks = args.seed_block.split(",")
+    for num_seeds, block in ((n, b) for n in counts for b in blocks):
         per_device = -(-num_seeds // len(devices))
-        block = per_device if args.seed_block == "auto" else int(args.seed_block)
+        block = per_device if block == "auto" else int(block)
         config = TrainConfig.for_env(args.env, num_seeds=num_seeds, cycles=args.cycles, seed_block=block)
         run = measure_cycles(config, devices)
         times = run["times"]

@@ -3,7 +3,7 @@ devices, each device updating its seeds one after another, as in a cycle).
 
     python -m bench.updates [--env light_switch_door] [--num-seeds 8] [--updates 1000] [--devices auto|N]
 
-The updates are `jaxbridge.dqn.update_step` (sample a minibatch from the replay buffer, Adam step, polyak
+The updates are `jaxbridge.dqn.update_step` (the minibatch slots drawn up front by `minibatch_indices`; Adam step, polyak
 step) in a `lax.scan`, as `learn` runs them; the buffer is the one after two training cycles. Not timed:
 the target relabelling that precedes them in a cycle.
 """
@@ -22,16 +22,17 @@ def measure_updates(experiment, seeds, learners, updates: int, repeats: int = 3)
     calls after a compiling one. Returns compile seconds (tracing, lowering and XLA of the first call), the median seconds per call
     and updates per second over all seeds."""
     from jaxbridge import compile_cache
-    from jaxbridge.dqn import update_step
+    from dataclasses import replace
+    from jaxbridge.dqn import minibatch_indices, update_step
 
     env, config = experiment.train.env, experiment.config
+    config = replace(config, updates_per_cycle=updates)
 
     def per_seed(learner, targets):
-        def body(learner, _):
-            learner, (loss, _) = update_step(env, config, learner, targets)
-            return learner, loss
-        learner, losses = jax.lax.scan(body, learner, None, length=updates)
-        return learner, losses.mean()
+        key, indices = minibatch_indices(config, learner)
+        learner, (losses, _) = jax.lax.scan(
+            lambda learner, index: update_step(env, config, learner, targets, index), learner, indices)
+        return learner.replace(key=key), losses.mean()
 
     run = jax.jit(seeds.map_seeds(per_seed), out_shardings=seeds.sharding)
     real = seeds.real()
