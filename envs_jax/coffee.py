@@ -178,6 +178,8 @@ class Coffee(NoveltyEnv):
     def full_state(self, state: State) -> jax.Array:
         """float32[32]: robot (x, y, z, tilt, wrist, fingers); jug (x, y, rot, held, filled); machine (on);
         per cup (x, y, capacity, target, current), zeros for absent cups, padded to 4 cups."""
+        if not self.full_state_fits:
+            raise ValueError(f"the full-state observation holds at most {MAX_CUPS} cups; this env has {self.max_cups}")
         task = state.task
         jug = jnp.concatenate([state.jug_xy, jnp.stack([state.jug_rot, state.jug_held, state.jug_filled])
                                .astype(jnp.float32)])

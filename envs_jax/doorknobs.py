@@ -298,6 +298,9 @@ class Doorknobs(NoveltyEnv):
         """float32[full_state_size]: robot (x, y); rooms (x, y); doors (x, y, theta, mass, friction, open);
         knobs (x, y, theta, rot, target_rot, open); walls, then clutter (x, y, width, height, theta).
         Objects sit at their 5x5 slot (row * 5 + col), zeros where absent, whatever this env's capacity."""
+        if not self.full_state_fits:  # a larger map's objects have no slot (they would be dropped silently)
+            raise ValueError(f"the full-state observation holds maps up to {TEST_MAP_SIZE}x{TEST_MAP_SIZE}; "
+                             f"this env's maps are {self.map_size}x{self.map_size}")
         task, m, big = state.task, self.map_size, TEST_MAP_SIZE
         room_at = np.array([r * big + c for r in range(m) for c in range(m)])  # this capacity's slot -> 5x5
         door_at = (2 * room_at[:, None] + np.arange(2)).reshape(-1)

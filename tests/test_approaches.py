@@ -157,3 +157,17 @@ def test_env_defaults_sit_between_the_paper_defaults_and_explicit_overrides():
     assert TrainConfig.for_env("coffee", updates_per_cycle=1000).updates_per_cycle == 1000
     with pytest.raises(ValueError, match="unknown env"):
         TrainConfig.for_env("nowhere")
+
+
+@pytest.mark.parametrize("env,message", [
+    ("doorknobs", "holds maps up to 5x5; this env's maps are 7x7"),
+    ("coffee", "holds at most 4 cups; this env has 6"),
+])
+def test_a_full_state_too_small_for_the_env_is_refused(env, message):
+    """The full-state ablations' input is sized to the test tasks; a larger env must not be cut to fit
+    (Doorknobs once dropped a 7x7 map's extra objects without a word)."""
+    from envs_jax import env_class
+    big = env_class(env)(map_size=7) if env == "doorknobs" else env_class(env)(max_cups=6)
+    assert not big.full_state_fits
+    with pytest.raises(ValueError, match=message):
+        big.full_state(None)  # refused before the state is read
