@@ -88,7 +88,7 @@ def parse_args(argv):
                         "with its saved config")
     p.add_argument("--workers", type=positive_int, default=None,
                    help="approaches trained at the same time, in threads (default: one per CPU core, at most one "
-                        "per approach); results do not depend on it")
+                        "per approach); they split the devices between them; results do not depend on it")
     p.add_argument("--devices", type=device_count_arg, default="auto", metavar="auto|N",
                    help="shard the seeds over N local devices: auto = all GPUs/TPUs, or on a CPU-only machine one "
                         "virtual CPU device per core (set before JAX starts; XLA_FLAGS="

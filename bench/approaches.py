@@ -2,6 +2,10 @@
 (`train.py`'s driver, run files and checkpoints included), into a temporary directory.
 
     python -m bench.approaches [--env light_switch_door] [--num-seeds 8] [--cycles 100] [--approaches all]
+                               [--workers N] [--devices auto|N]
+
+The layout is train.py's: approaches in --workers threads, each sharding its seeds over --devices
+(default auto: one virtual CPU device per core).
 
 Prints each approach's time and final numbers, the total, and the ratio to the authors' compute for the
 same figure (results.md: on the order of 100 CPU-hours for 6 approaches x 8 seeds).
@@ -19,8 +23,8 @@ import jax
 from bench.training import AUTHORS_WHOLE_RUN_S  # one seed-run of "ours", per env (results.md)
 from jaxbridge.approaches import APPROACHES
 from jaxbridge.config import TrainConfig
+from jaxbridge.devices import describe, device_count_arg, select_devices
 from jaxbridge.experiments import default_workers, train_approaches
-
 
 
 def main() -> None:
@@ -30,18 +34,21 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
     parser.add_argument("--approaches", default="all", help="comma-separated approaches or all (default: all)")
     parser.add_argument("--workers", type=int, default=None, help="approaches at a time (default: one per core)")
+    parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--keep", type=Path, default=None, help="write the experiment here instead of a temp dir")
     args = parser.parse_args()
+    devices = select_devices(args.devices)  # before JAX starts
     names = list(APPROACHES) if args.approaches == "all" else args.approaches.split(",")
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles)
     with tempfile.TemporaryDirectory() as tmp:
         out = args.keep or Path(tmp) / args.env
         out.mkdir(parents=True, exist_ok=True)
         start = time.perf_counter()
-        summaries = train_approaches(config, names, out, progress=False, workers=args.workers)
+        summaries = train_approaches(config, names, out, progress=False, workers=args.workers,
+                                     devices=devices)
         total = time.perf_counter() - start
         results = (out / "results.md").read_text()
-    print(f"jax {jax.__version__}, devices: {jax.devices()}")
+    print(f"jax {jax.__version__}, each approach's seeds over {describe(devices)} device(s)")
     print(f"{args.env}: {len(names)} approaches x {args.num_seeds} seeds x {args.cycles} cycles, "
           f"{args.workers or default_workers(names)} at a time")
     for name, info in summaries.items():

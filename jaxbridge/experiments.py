@@ -5,13 +5,16 @@ The approaches run concurrently in worker threads: each one's cycles are one jit
 that releases the GIL, so on a 2-core CPU two approaches train in about the time of one (measured 2.2x
 for two 8-seed cycles in two threads vs one after the other). Each approach's numbers do not depend on
 what runs beside it. One progress bar counts the cycles of all of them. Each approach also shards its
-seeds over `devices` (jaxbridge/devices.py); neither changes any number.
+seeds over devices (jaxbridge/devices.py): the workers split `devices` between them, so that two
+approaches on 2 cores run one device each rather than four device streams on two cores (Light Switch
+Door's six approaches: 373.6 s vs 402.7 s, docs/PERFORMANCE.md). Neither changes any number.
 """
 from __future__ import annotations
 
 import dataclasses
 import json
 import os
+import queue
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from pathlib import Path
@@ -46,6 +49,14 @@ def default_workers(approaches: list[str]) -> int:
     return max(1, min(len(approaches), os.cpu_count() or 1))
 
 
+def split_devices(devices: list | None, workers: int) -> list:
+    """One share of `devices` per worker: as even as possible, every device in one share; with fewer
+    devices than workers, every worker gets all of them (None stays None: the default device)."""
+    if not devices or len(devices) < workers:
+        return [devices] * workers
+    return [devices[i::workers] for i in range(workers)]
+
+
 def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
                      resume: bool = False, workers: int | None = None, devices: list | None = None) -> dict[str, dict]:
     """Train every approach (run directory `experiment_dir/<approach>`), `workers` at a time, then write
@@ -59,6 +70,9 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
     bar = tqdm(total=config.cycles * len(approaches), unit="cycle", disable=not progress, dynamic_ncols=True,
                desc=f"{config.env} x{config.num_seeds} seeds, {len(approaches)} approaches")
     stop = threading.Event()
+    device_shares = queue.SimpleQueue()  # a worker takes a share of the devices per approach, then returns it
+    for share in split_devices(devices, min(workers, len(approaches))):
+        device_shares.put(share)
 
     def run(name: str) -> dict:
         if stop.is_set():  # interrupted before this approach's turn
@@ -67,8 +81,12 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         started = (run_dir / "checkpoints").is_dir() and bool(checkpoint.sealed_steps(run_dir / "checkpoints"))
         if not started:
             prepare_run_dir(run_dir, overwrite=True)
-        return train(dataclasses.replace(config, approach=name), run_dir, resume=started, bar=bar, stop=stop,
-                     devices=devices)
+        share = device_shares.get()
+        try:
+            return train(dataclasses.replace(config, approach=name), run_dir, resume=started, bar=bar, stop=stop,
+                         devices=share)
+        finally:
+            device_shares.put(share)
 
     order = sorted(approaches, key=lambda a: -COST.get(a, 0))
     try:

@@ -314,7 +314,20 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, tasks: Any, tab
         episodes, rec = jax.vmap(partial(execute, env))(episodes, decide, decision, stuck)
         return episodes, (rec if record else None)
 
-    episodes, records = jax.lax.scan(step, episodes, step_randomness(keys, max_steps))
+    randomness = step_randomness(keys, max_steps)
+    if record:  # the records are one row per step: every step runs
+        episodes, records = jax.lax.scan(step, episodes, randomness)
+    else:  # stop once every episode is done: the steps after it change none of the results
+        def more(carry):
+            t, episodes = carry
+            return (t < max_steps) & ~jnp.all(episodes.done)
+
+        def one_step(carry):
+            t, episodes = carry
+            return t + 1, step(episodes, jax.tree.map(lambda r: r[t], randomness))[0]
+
+        _, episodes = jax.lax.while_loop(more, one_step, (jnp.int32(0), episodes))
+        records = None
     episodes, *_ = jax.vmap(partial(observe, env))(episodes)  # the goal test on the final state
     result = EpisodeResult(success=episodes.success, steps=episodes.t,
                            planner_calls=episodes.planner_calls, table_misses=episodes.table_misses,

@@ -105,3 +105,13 @@ def test_seed_padding_round_trips():
     back = mesh.unpad(mesh.place(tree))
     assert np.array_equal(back["a"], tree["a"])
     assert np.array_equal(jax.random.key_data(back["k"]), jax.random.key_data(tree["k"]))
+
+
+def test_concurrent_approaches_split_the_devices_between_them():
+    from jaxbridge.experiments import split_devices
+    devices = ["d0", "d1", "d2", "d3"]  # only their identity matters here
+    assert split_devices(devices, 2) == [["d0", "d2"], ["d1", "d3"]]
+    assert split_devices(devices, 3) == [["d0", "d3"], ["d1"], ["d2"]]
+    assert split_devices(devices, 1) == [devices]
+    assert split_devices(devices[:1], 2) == [["d0"], ["d0"]]  # fewer devices than workers: all share them
+    assert split_devices(None, 2) == [None, None]

@@ -11,11 +11,11 @@ from jaxbridge import checkpoint, compile_cache
 from jaxbridge.bridges import make_bridge
 from jaxbridge.config import TrainConfig
 from jaxbridge.devices import SeedMesh
-from jaxbridge.dqn import epsilon, init_learner, learn, td_targets
+from jaxbridge.dqn import epsilon, init_learner, learn, minibatch_indices, td_targets
 from jaxbridge.meta_policy import rollout
 from jaxbridge.online import build_experiment, init_learners, make_cycle, smooth
 from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
-from jaxbridge.replay import add, init_buffer, sample
+from jaxbridge.replay import add, init_buffer, sample, sample_indices
 from jaxbridge.tasks import make_batch
 from jaxbridge.transitions import Transition, episode_transitions
 
@@ -112,6 +112,24 @@ def test_replay_buffer_masked_insert_wraps_fifo_and_samples_stored_items():
     assert int(buffer.insert_at) == 2
     drawn = np.asarray(sample(buffer, jax.random.key(0), 200))
     assert set(drawn.tolist()) == {4.0, 10.0, 11.0, 12.0}
+
+
+def test_minibatches_drawn_up_front_are_the_draws_of_one_split_per_update():
+    """`learn` draws all its minibatch slots before the updates; they must be the stream an update
+    loop splitting the key once per update would draw (the documented runs were made with that loop)."""
+    config = TrainConfig(updates_per_cycle=30, batch_size=16)
+    learner = init_learner(ENV, config, jax.random.key(3))
+    learner = learner.replace(buffer=learner.buffer.replace(size=jnp.int32(77)))
+    key, indices = minibatch_indices(config, learner)
+
+    def one_per_update(key, _):
+        key, k_sample = jax.random.split(key)
+        return key, sample_indices(learner.buffer, k_sample, config.batch_size)
+
+    expected_key, expected = jax.lax.scan(one_per_update, learner.key, None, length=config.updates_per_cycle)
+    assert indices.shape == (30, 16) and np.array_equal(indices, expected)
+    assert np.array_equal(jax.random.key_data(key), jax.random.key_data(expected_key))
+    assert 0 <= int(indices.min()) and int(indices.max()) < 77 and len(np.unique(indices)) > 60
 
 
 def test_one_transition_per_decision_and_call_planner_spans_the_plan():
