@@ -1,0 +1,98 @@
+"""Where a learning step's time goes, per approach: one seed on one device, the replay buffer filled to
+--fill transitions, microseconds per minibatch update for `dqn.learn` as a whole and for each part.
+
+    python -m bench.update_parts [--env light_switch_door] [--approaches ours,no_feature_selection,maple_q]
+                                 [--fill 16384] [--updates 1000]
+
+Parts (each jitted alone, over --updates iterations, after a compiling call): the minibatch draws
+(`minibatch_indices`, all updates at once), gathering and encoding a minibatch, the forward and backward
+pass on a fixed minibatch, clip + Adam, the polyak step; and the per-cycle relabelling of the buffer
+(whole, in ms). The parts do not add up to the whole exactly: XLA fuses across them in `learn`.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import jax
+import jax.numpy as jnp
+import optax
+
+from jaxbridge import dqn
+from jaxbridge.config import TrainConfig
+from jaxbridge.online import seed_learners, training_env
+from jaxbridge.q_bridge import encode
+
+
+def _seconds(fn, arg) -> float:
+    run = jax.jit(fn)
+    jax.block_until_ready(run(arg))
+    start = time.perf_counter()
+    jax.block_until_ready(run(arg))
+    return time.perf_counter() - start
+
+
+def measure(env_name: str, approach: str, fill: int, updates: int) -> dict:
+    config = TrainConfig.for_env(env_name, approach=approach, num_seeds=1, updates_per_cycle=updates)
+    env = training_env(config)
+    learner = jax.tree.map(lambda x: x[0], seed_learners(env, config))
+    learner = learner.replace(buffer=learner.buffer.replace(size=jnp.int32(fill)))  # zeros: timing only
+    net, optimizer = dqn.q_network(config), dqn.make_optimizer(config)
+    _, indices = dqn.minibatch_indices(config, learner)
+    batch = jax.tree.map(lambda d: d[indices[0]], learner.buffer.data)
+    inputs = encode(env, batch.features, batch.skill, batch.param)
+
+    def repeat(step):  # `updates` iterations of step(carry) in a scan
+        return lambda carry: jax.lax.scan(lambda c, _: (step(c), None), carry, None, length=updates)[0]
+
+    def gather_encode(total):
+        def one(total, index):
+            b = jax.tree.map(lambda d: d[index], learner.buffer.data)
+            return total + encode(env, b.features, b.skill, b.param).sum(), None
+        return jax.lax.scan(one, total, indices)[0]
+
+    def forward_backward(params):
+        grads = jax.grad(lambda p: jnp.mean((net.apply(p, inputs, members=True) - 1.0) ** 2))(params)
+        return jax.tree.map(lambda p, g: p - 1e-3 * g, params, grads)
+
+    def adam(state):
+        params, opt_state = state
+        step, opt_state = optimizer.update(params, opt_state, params)
+        return optax.apply_updates(params, step), opt_state
+
+    per_update = lambda s: 1e6 * s / updates
+    return {
+        "input": inputs.shape[-1],
+        "learn_us": per_update(_seconds(lambda l: dqn.learn(env, config, l, jnp.int32(0)), learner)),
+        "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(env, config, l, l.key), learner),
+        "draws_us": per_update(_seconds(lambda l: dqn.minibatch_indices(config, l), learner)),
+        "gather_encode_us": per_update(_seconds(gather_encode, jnp.float32(0))),
+        "forward_backward_us": per_update(_seconds(repeat(forward_backward), learner.params)),
+        "adam_us": per_update(_seconds(repeat(adam), (learner.params, learner.opt_state))),
+        "polyak_us": per_update(_seconds(repeat(lambda t: optax.incremental_update(learner.params, t, 0.0025)),
+                                         learner.target_params)),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
+    parser.add_argument("--approaches", default="ours,no_feature_selection,maple_q",
+                        help="comma-separated approaches (default: %(default)s)")
+    parser.add_argument("--fill", type=int, default=16384, help="stored transitions (default: %(default)s)")
+    parser.add_argument("--updates", type=int, default=1000, help="updates per timed call (default: %(default)s)")
+    args = parser.parse_args()
+    print(f"jax {jax.__version__}, one {jax.devices()[0].platform} device, {args.env}, buffer filled to {args.fill}, "
+          f"us per update")
+    columns = ["input", "learn_us", "relabel_ms", "draws_us", "gather_encode_us", "forward_backward_us", "adam_us",
+               "polyak_us"]
+    print("| approach | " + " | ".join(columns) + " |")
+    print("|---" * (len(columns) + 1) + "|")
+    for approach in args.approaches.split(","):
+        row = measure(args.env, approach, args.fill, args.updates)
+        print(f"| {approach} | " + " | ".join(f"{row[c]:.1f}" if c != "input" else str(row[c]) for c in columns)
+              + " |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
