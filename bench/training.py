@@ -1,6 +1,7 @@
 """Wall-clock of the paper's protocol for our method: 8 seeds x 100 cycles, seeds over every device.
 
     python -m bench.training [--env doorknobs] [--num-seeds 8] [--cycles 100] [--devices auto|N]
+                             [--seed-block 1] [--approach ours]
 
 Prints the time to build tasks and plans, the first cycle (mostly compilation), the steady-state
 seconds per cycle, the total, and the ratio to the authors' run time of one seed (results.md: Light
@@ -62,15 +63,17 @@ def main() -> None:
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
+    parser.add_argument("--approach", default="ours", help="which approach (default: %(default)s)")
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
-    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles, seed_block=args.seed_block)
+    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles, seed_block=args.seed_block,
+                                 approach=args.approach)
     run = measure_cycles(config, seeds_over)
     times, total = run["times"], run["total_s"]
     steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
     per_seed_run = total / config.num_seeds
     print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s), seed block {config.seed_block}")
-    print(f"{config.env}: {config.num_seeds} seeds x {config.cycles} cycles, {config.updates_per_cycle} updates/cycle, "
+    print(f"{config.env}, {config.approach}: {config.num_seeds} seeds x {config.cycles} cycles, {config.updates_per_cycle} updates/cycle, "
           f"batch {config.batch_size}")
     print(f"tasks + plan tables: {run['build_s']:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "
           f"steady state: {steady:.3f} s/cycle")
