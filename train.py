@@ -95,10 +95,10 @@ def parse_args(argv):
                         "--xla_force_host_platform_device_count=K takes precedence). Seeds need not divide evenly. "
                         "Results do not depend on it (default: %(default)s)")
     p.add_argument("--seed-block", type=positive_int,
-                   help="seeds computed side by side (vmapped) on each device; 1 runs them one after another, "
-                        "which is fastest on a CPU and makes each seed's numbers independent of everything else; "
-                        "on a GPU use the seeds per device (e.g. 64) to fill it. Results then depend on the block "
-                        f"(not on --devices) (default: {d.seed_block})")
+                   help="seeds computed side by side (vmapped) on each device, for GPUs (not yet measured on one); "
+                        "1 runs them one after another, which keeps each seed's numbers independent of every other "
+                        "seed, and on 2 CPU cores was as fast as blocks (docs/PERFORMANCE.md). Results depend on "
+                        f"the block (not on --devices) (default: {d.seed_block})")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
     p.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return p.parse_args(argv)

@@ -34,7 +34,9 @@ def clipped_adam(max_norm: float, learning_rate: float) -> optax.GradientTransfo
         norm = optax.tree.norm(grads)
         short = norm < max_norm
         grads = jax.tree.map(lambda g: jax.lax.select(short, g, _divide(g, norm) * max_norm), grads)
-        # Adam: moving moments, bias-corrected, then a step of -learning_rate.
+        # Adam: moving moments, bias-corrected, then a step of -learning_rate. `g ** 1`, `v + 0.0` and
+        # `-1 * learning_rate` are optax's own expressions (order 1, eps_root 0, flip_sign), kept so
+        # that XLA sees the same program and the numbers match it to the bit.
         mu = jax.tree.map(lambda g, m: (1 - B1) * (g ** 1) + B1 * m, grads, adam.mu)
         nu = jax.tree.map(lambda g, v: (1 - B2) * (g ** 2) + B2 * v, grads, adam.nu)
         count = optax.safe_increment(adam.count)

@@ -1,16 +1,14 @@
 """Sharding the seeds over devices does not change a single bit: a short training on 2 virtual CPU
-devices (3 seeds: one padded slot) gives the metrics and parameters of 1 device; seed blocks (vmapped)
-fit the same numbers on 1 and 2 devices. (Checkpoints hold the
+devices (3 seeds: one padded slot) gives the metrics and parameters of 1 device. (Seed blocks on 1 and
+2 devices: tests/test_optim.py.) (Checkpoints hold the
 unpadded state on one device whatever the count, so a run also resumes on another device count to the
 same numbers: checked by hand, see docs/PERFORMANCE.md; not in the suite, for time.)"""
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -71,47 +69,6 @@ def test_two_devices_give_the_metrics_and_parameters_of_one(runs):
     assert same(a, b)
 
 
-def blocks_on_one_and_two_devices() -> bool:
-    """4 seeds in blocks of 2, each fitting a small net with the learner's optimiser for 40 steps: two
-    blocks on one device, or one on each of two. Whether every number came out the same. (The cheap
-    stand-in for a whole training run, whose check is `python -m bench.devices --seed-block 2`: the
-    optimiser's divisions were what made blocks differ, docs/RELIABILITY.md.)"""
-    from jaxbridge.dqn import make_optimizer
-    optimizer = make_optimizer(TrainConfig())
-
-    def fit(state, xs):
-        def step(state, x):
-            params, opt_state = state
-            loss = lambda p: jnp.mean((jnp.tanh(x @ p["w1"]) @ p["w2"] - jnp.sin(x.sum(-1, keepdims=True))) ** 2)
-            value, grads = jax.value_and_grad(loss)(params)
-            updates, opt_state = optimizer.update(grads, opt_state, params)
-            return (jax.tree.map(jnp.add, params, updates), opt_state), value
-        return jax.lax.scan(step, state, xs)
-
-    def init(key):
-        k1, k2 = jax.random.split(key)
-        params = {"w1": 3.0 * jax.random.normal(k1, (12, 32)), "w2": 3.0 * jax.random.normal(k2, (32, 1))}
-        return params, optimizer.init(params)
-
-    states = jax.vmap(init)(jax.random.split(jax.random.key(0), 4))
-    xs = jax.random.normal(jax.random.key(1), (4, 40, 64, 12))
-    results = []
-    for n in (1, 2):
-        seeds = SeedMesh(4, tuple(jax.local_devices()[:n]), block=2)
-        out = jax.jit(seeds.map_seeds(fit))(seeds.real(), seeds.place(states), seeds.place(xs))
-        results.append([np.asarray(x) for x in jax.tree.leaves(out)])
-    assert not np.array_equal(results[0][-1][0], results[0][-1][1])  # the seeds do differ
-    return all(np.array_equal(a, b) for a, b in zip(*results))
-
-
-def test_seed_blocks_give_the_same_numbers_on_one_and_two_devices():
-    # Its own process: 2 virtual CPU devices must be set before JAX starts.
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
-    proc = subprocess.run([sys.executable, __file__], capture_output=True, text=True, timeout=300, env=env)
-    assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.split() == ["2", "True"]
-
-
 def test_bad_device_counts_are_one_line_errors():
     for value, message in (("0", "expected auto or a positive integer, got 0"),
                            ("foo", "expected auto or a positive integer, got 'foo'")):
@@ -150,7 +107,3 @@ def test_concurrent_approaches_split_the_devices_between_them():
     assert split_devices(devices[:1], 2) == [["d0"], ["d0"]]  # fewer devices than workers: all share them
     assert split_devices(None, 2) == [None, None]
 
-
-if __name__ == "__main__":
-    jax.config.update("jax_num_cpu_devices", 2)
-    print(len(jax.local_devices()), blocks_on_one_and_two_devices())

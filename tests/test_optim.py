@@ -1,11 +1,19 @@
-"""The learner's optimiser is optax's clip-then-Adam to the bit (jaxbridge/optim.py says why it is ours;
-tests/test_devices.py checks what it is for: seed blocks identical on 1 and 2 devices)."""
+"""The learner's optimiser is optax's clip-then-Adam to the bit, and unlike it gives a seed the same
+numbers whether its seed block shares a device or not (jaxbridge/optim.py says why). A whole training
+run in blocks is checked by `python -m bench.devices --seed-block 2`, too slow for the suite."""
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
 
+from jaxbridge.config import TrainConfig
+from jaxbridge.devices import SeedMesh
+from jaxbridge.dqn import make_optimizer
 from jaxbridge.optim import clipped_adam
 
 MAX_NORM, LR = 5.0, 1e-3
@@ -52,3 +60,34 @@ def test_clipped_adam_is_optax_clip_then_adam_to_the_bit():
         assert all(np.array_equal(x, y) for x, y in zip(leaves(a), leaves(b)))
     grads = jax.grad(lambda p: jnp.sum(p["w1"] ** 2))(params)
     assert float(optax.tree.norm(grads)) > MAX_NORM  # the large-weight case did clip
+
+
+def blocks_on_one_and_two_devices(optimizer) -> bool:
+    """4 seeds in blocks of 2 (needs 2 devices): two blocks on one device, or one on each of two.
+    Whether every number came out the same."""
+    devices = jax.local_devices()
+    states = seed_states(optimizer, 4, 3.0)
+    xs = jax.random.normal(jax.random.key(2), (4, 40, 64, 12))
+    results = []
+    for n in (1, 2):
+        seeds = SeedMesh(4, tuple(devices[:n]), block=2)
+        run = jax.jit(seeds.map_seeds(fit(optimizer)))
+        results.append(leaves(run(seeds.real(), seeds.place(states), seeds.place(xs))))
+    assert not np.array_equal(results[0][-1][0], results[0][-1][1])  # the seeds do differ
+    return all(np.array_equal(x, y) for x, y in zip(*results))
+
+
+def test_seed_blocks_give_the_same_numbers_on_one_and_two_devices():
+    # Its own process: 2 virtual CPU devices must be set before JAX starts.
+    root = str(Path(__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.run([sys.executable, __file__], capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["2", "True"]
+
+
+if __name__ == "__main__":  # the learner's optimiser; --optax: optax's, to see the check fail
+    jax.config.update("jax_num_cpu_devices", 2)
+    print(len(jax.local_devices()), blocks_on_one_and_two_devices(
+        optax.chain(optax.clip_by_global_norm(MAX_NORM), optax.adam(LR)) if "--optax" in sys.argv
+        else make_optimizer(TrainConfig())))
