@@ -9,6 +9,8 @@ nothing inside a cycle touches the host.
 """
 from __future__ import annotations
 
+import functools
+import threading
 from dataclasses import dataclass
 from functools import partial
 from typing import Callable
@@ -63,13 +65,32 @@ class Experiment:
         return self.test.env
 
 
+_TASKS_LOCK = threading.Lock()
+
+
+@functools.lru_cache(maxsize=4)
+def _build_tasks(env: str, seeds: tuple[int, ...], episodes: int, train_steps: int,
+                 num_test_tasks: int) -> tuple[TaskBatch, TaskBatch]:
+    env_cls = env_class(env)
+    train_specs = [env_cls.train_task(s) for s in seeds for _ in range(episodes)]
+    train_owner = [s for s in seeds for _ in range(episodes)]
+    train = make_batch(env_cls, train_specs, train_owner, horizons=[train_steps] * len(train_specs))
+    return train, evaluation_batch(env_cls, list(seeds), num_test_tasks)
+
+
+def task_batches(config: TrainConfig) -> tuple[TaskBatch, TaskBatch]:
+    """The seeds' training batch (episodes_per_cycle copies of each seed's training task) and test batch.
+
+    Built once per process for equal settings and shared (read-only): every approach of an experiment
+    trains and tests on the same tasks, and their host-side build (planner tables, Doorknobs' roadmaps)
+    takes 7-19 s each time. The lock makes a second worker wait for the first's build, not repeat it."""
+    with _TASKS_LOCK:
+        return _build_tasks(config.env, tuple(config.seeds), config.episodes_per_cycle, config.train_steps,
+                            config.num_test_tasks)
+
+
 def build_experiment(config: TrainConfig) -> Experiment:
-    env_cls = env_class(config.env)
-    seeds = config.seeds
-    train_specs = [env_cls.train_task(s) for s in seeds for _ in range(config.episodes_per_cycle)]
-    train_owner = [s for s in seeds for _ in range(config.episodes_per_cycle)]
-    train = make_batch(env_cls, train_specs, train_owner, horizons=[config.train_steps] * len(train_specs))
-    test = evaluation_batch(env_cls, seeds, config.num_test_tasks)
+    train, test = task_batches(config)
     net = q_network(config)
     approach = get_approach(config.approach)
     return Experiment(config, approach, train, test, net, approach.make_bridge(train.env, net, config.n_sample),

@@ -136,6 +136,14 @@ def test_no_feature_selection_sees_the_padded_full_state(tests_batch):
             LightSwitchDoor(max_cells=25).task_arrays(LightSwitchDoor.test_tasks(0, 1)[0])))
 
 
+def test_approaches_of_one_experiment_share_its_tasks_and_other_seeds_get_their_own():
+    ours, ablation = build_experiment(TINY), build_experiment(replace(TINY, approach="maple_q"))
+    assert ours.train is ablation.train and ours.test is ablation.test  # built once, not per approach
+    other = build_experiment(replace(TINY, first_seed=1))
+    assert other.test is not ours.test and other.test.seeds.tolist() == [1, 1]
+    assert ours.test.seeds.tolist() == [0, 0]
+
+
 def test_random_and_pure_planning_leave_the_network_untouched():
     for name in ("random", "pure_planning"):
         experiment = build_experiment(replace(TINY, approach=name))

@@ -14,7 +14,8 @@ from jaxbridge.devices import SeedMesh
 from jaxbridge.dqn import epsilon, init_learner, learn, minibatch_indices, td_targets
 from jaxbridge.meta_policy import rollout
 from jaxbridge.online import build_experiment, init_learners, make_cycle, smooth
-from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
+from jaxbridge.q_bridge import (SPLIT_FROM_FEATURES, QNetwork, SplitInput, best_candidate, candidate_skills,
+                                candidates_input, encode, input_size, sample_candidates)
 from jaxbridge.replay import add, init_buffer, sample, sample_indices
 from jaxbridge.tasks import make_batch
 from jaxbridge.transitions import Transition, episode_transitions
@@ -101,6 +102,31 @@ def test_an_ensemble_is_the_minimum_of_independent_members_all_fitted_to_the_tar
     assert members.shape == (2, 64) and np.abs(np.asarray(members) - np.asarray(batch.reward)).max() < 0.2
     value = pair.apply(learner.params, encode(ENV, f, skill, jnp.zeros(64)))
     assert np.array_equal(np.asarray(value), np.asarray(members).min(0))
+
+
+@pytest.mark.parametrize("ensemble", [1, 2])
+def test_a_wide_observation_is_split_off_the_candidates_without_changing_q_or_the_choice(ensemble):
+    """Full-state observations (>= SPLIT_FROM_FEATURES values) go in as a SplitInput: the same parameters,
+    the same Q up to rounding, the same greedy candidate; narrow ones keep the concatenated input."""
+    width = SPLIT_FROM_FEATURES + 19
+    net = QNetwork((32, 32), ensemble)
+    params = net.init(jax.random.key(0), jnp.zeros((1, width + ENV.num_skills + 2)))
+    params = jax.tree.map(lambda p: p + 0.3 * jax.random.normal(jax.random.key(1), p.shape), params)  # nonzero output
+    features = jax.random.normal(jax.random.key(2), (width,))
+    skills = candidate_skills(ENV, 10)
+    param = jax.random.uniform(jax.random.key(3), skills.shape)
+    split = candidates_input(ENV, features, jnp.asarray(skills), param)
+    assert isinstance(split, SplitInput)
+    assert isinstance(candidates_input(ENV, features[:5], jnp.asarray(skills), param), jax.Array)
+    whole = np.asarray(net.apply(params, encode(ENV, features, jnp.asarray(skills), param)))
+    np.testing.assert_allclose(np.asarray(net.apply(params, split)), whole, atol=1e-5)
+    ground = jnp.ones(ENV.num_skills + 1, jnp.int32)
+    action, best = best_candidate(ENV, net, params, features, ground, skills, jax.random.key(4))
+    drawn = sample_candidates(ENV, skills, jax.random.key(4))  # best_candidate's own parameter draws
+    whole = np.asarray(net.apply(params, encode(ENV, features, jnp.asarray(skills), drawn)))
+    chosen = int(np.argmax(whole))
+    assert int(action.skill) == skills[chosen] and float(action.param) == float(drawn[chosen])
+    assert float(best) == pytest.approx(whole[chosen], abs=1e-5)
 
 
 def test_replay_buffer_masked_insert_wraps_fifo_and_samples_stored_items():
