@@ -15,7 +15,7 @@ from jaxbridge.meta_policy import observation_size
 from jaxbridge.optim import clipped_adam
 from jaxbridge.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
 from jaxbridge.replay import ReplayBuffer, init_buffer, sample_indices
-from jaxbridge.transitions import Transition
+from jaxbridge.transitions import Transition, for_buffer, successor_features
 
 
 @struct.dataclass
@@ -45,10 +45,11 @@ def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:
 
 
 def empty_transition(num_features: int, num_skills: int) -> Transition:
+    """The replay buffer's item: a transition without next_features (transitions.for_buffer)."""
     f = jnp.zeros(num_features, jnp.float32)
-    return Transition(features=f, skill=jnp.int32(0), param=jnp.float32(0), reward=jnp.float32(0),
-                      done=jnp.bool_(True), next_features=f,
-                      next_num_ground=jnp.zeros(num_skills + 1, jnp.int32))
+    return for_buffer(Transition(features=f, skill=jnp.int32(0), param=jnp.float32(0), reward=jnp.float32(0),
+                                 done=jnp.bool_(True), next_features=f,
+                                 next_num_ground=jnp.zeros(num_skills + 1, jnp.int32)))
 
 
 def init_learner(env: NoveltyEnv, config: TrainConfig, key: jax.Array) -> Learner:
@@ -93,6 +94,8 @@ def relabel(env: NoveltyEnv, config: TrainConfig, learner: Learner, key: jax.Arr
 
     def chunk_targets(i, targets):
         batch = jax.tree.map(lambda x: x[i], data)
+        slots = i * RELABEL_CHUNK + jnp.arange(RELABEL_CHUNK)
+        batch = batch.replace(next_features=successor_features(buffer.data.features, slots))
         y = td_targets(env, config, learner.params, learner.target_params, batch, jax.random.fold_in(key, i))
         return targets.at[i].set(y)
 

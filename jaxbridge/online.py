@@ -29,7 +29,7 @@ from jaxbridge.meta_policy import rollout
 from jaxbridge.q_bridge import QBridgeParams, QNetwork
 from jaxbridge.replay import add
 from jaxbridge.tasks import TaskBatch, evaluation_batch, make_batch
-from jaxbridge.transitions import episode_transitions
+from jaxbridge.transitions import episode_transitions, for_buffer
 
 
 @struct.dataclass
@@ -155,7 +155,7 @@ def make_seed_cycle(experiment: Experiment) -> Callable:
             transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
                 records, result.success, call_planner, config.call_planner_bonus)
             flat = lambda x: x.reshape((-1,) + x.shape[2:])
-            buffer = add(learner.buffer, jax.tree.map(flat, transitions), flat(valid))
+            buffer = add(learner.buffer, jax.tree.map(flat, for_buffer(transitions)), flat(valid))
             learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)
 
             # 3. Double-DQN updates.

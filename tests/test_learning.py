@@ -8,17 +8,17 @@ import pytest
 from envs_jax import light_switch_door as lsd
 from envs_jax.light_switch_door import LightSwitchDoor
 from jaxbridge import checkpoint, compile_cache
-from jaxbridge.bridges import make_bridge
+from jaxbridge.bridges import make_bridge, random_bridge
 from jaxbridge.config import TrainConfig
 from jaxbridge.devices import SeedMesh
 from jaxbridge.dqn import epsilon, init_learner, learn, minibatch_indices, td_targets
-from jaxbridge.meta_policy import rollout
+from jaxbridge.meta_policy import Controls, rollout
 from jaxbridge.online import build_experiment, init_learners, make_cycle, smooth
 from jaxbridge.q_bridge import (SPLIT_FROM_FEATURES, QNetwork, SplitInput, best_candidate, candidate_skills,
                                 candidates_input, encode, input_size, sample_candidates)
 from jaxbridge.replay import add, init_buffer, sample, sample_indices
-from jaxbridge.tasks import make_batch
-from jaxbridge.transitions import Transition, episode_transitions
+from jaxbridge.tasks import evaluation_batch, make_batch
+from jaxbridge.transitions import Transition, episode_transitions, for_buffer, successor_features
 
 ENV = LightSwitchDoor(5, 1)
 TINY = TrainConfig(num_seeds=2, cycles=3, updates_per_cycle=20, num_test_tasks=3, n_sample=10)
@@ -96,7 +96,7 @@ def test_an_ensemble_is_the_minimum_of_independent_members_all_fitted_to_the_tar
     skill = jnp.arange(64) % 2
     batch = Transition(features=f, skill=skill, param=jnp.zeros(64), reward=(skill == 0).astype(jnp.float32),
                        done=jnp.ones(64, bool), next_features=f, next_num_ground=jnp.ones((64, ENV.num_skills + 1), jnp.int32))
-    learner = learner.replace(buffer=add(learner.buffer, batch, jnp.ones(64, bool)))
+    learner = learner.replace(buffer=add(learner.buffer, for_buffer(batch), jnp.ones(64, bool)))
     learner, loss, _ = jax.jit(lambda l: learn(ENV, cfg, l, jnp.int32(64)))(learner)
     members = pair.apply(learner.params, encode(ENV, f, skill, jnp.zeros(64)), members=True)
     assert members.shape == (2, 64) and np.abs(np.asarray(members) - np.asarray(batch.reward)).max() < 0.2
@@ -173,6 +173,33 @@ def test_one_transition_per_decision_and_call_planner_spans_the_plan():
     assert np.asarray(transitions.done)[t].tolist() == [False, False, True]
     assert np.allclose(transitions.next_features[t[0]], records.features[t[1]])
     assert int(result.steps[0]) == spec.shortest_solution  # CallPlanner's transition ran the plan to the goal
+
+
+def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap_arounds():
+    """The buffer drops next_features (for_buffer) and successor_features restores them: checked against a
+    buffer that keeps them, on random-bridge episodes added one at a time into a buffer that wraps."""
+    batch = evaluation_batch(LightSwitchDoor, [0, 1], 4)
+    controls = Controls(full_state=True)  # the full state: every decision's observation differs
+    result, rec = rollout(batch.env, random_bridge(batch.env), None, batch.tasks, batch.tables, batch.horizons,
+                          jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True,
+                          controls=controls)
+    transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
+        rec, result.success, batch.env.num_skills, 0.0)
+    capacity = 23
+    full = init_buffer(jax.tree.map(lambda x: x[0, 0], transitions), capacity)
+    stored = init_buffer(for_buffer(jax.tree.map(lambda x: x[0, 0], transitions)), capacity)
+    assert stored.data.next_features is None
+    checked = differ = 0
+    for episode in range(batch.size):
+        items = jax.tree.map(lambda x: x[episode], transitions)
+        full, stored = add(full, items, valid[episode]), add(stored, for_buffer(items), valid[episode])
+        slots = np.arange(int(stored.size))
+        live = slots[~np.asarray(full.data.done)[slots]]
+        restored = np.asarray(successor_features(stored.data.features, jnp.asarray(live)))
+        np.testing.assert_array_equal(restored, np.asarray(full.data.next_features)[live])
+        checked += len(live)
+        differ += int(np.any(restored != np.asarray(stored.data.features)[live], axis=1).sum())
+    assert int(valid.sum()) > 2 * capacity and checked > 2 * capacity and differ > capacity
 
 
 def test_different_seeds_get_different_networks_and_the_same_seed_the_same():
