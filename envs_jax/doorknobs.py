@@ -151,10 +151,11 @@ class Doorknobs(NoveltyEnv):
     #   errors, which the targets fed back (|Q| reached 1.8 > the achievable 1.5); clipping the bootstrap
     #   and taking the minimum of two networks keep every seed at 1.0 from cycle ~40 to 100.
     train_defaults = {"call_planner_bonus": 0.5, "updates_per_cycle": 150, "clip_bootstrap": True, "q_ensemble": 2}
-    # Every object padded to 5x5 makes a 2027-value full state: the full-state ablations' minibatch updates
-    # would cost ~100x ours, so train.py leaves them out unless asked (--approaches all).
+    # Every object padded to 5x5 makes a 2027-value full state: each full-state ablation takes ~20 minutes
+    # on 2 cores (ours ~2), so train.py leaves them out unless asked (--approaches all; docs/PERFORMANCE.md).
     default_approaches = ("ours", "no_callplanner", "random", "pure_planning")
-    why_not_all = "their full-state input is 2027 values wide and their updates ~100x dearer"
+    why_not_all = ("their full state is 2027 values wide: all six take ~25 minutes on 2 cores, these four ~4, "
+                   "and ~7 GB of memory each")
     # "No feature selection": every object's raw features, padded to the largest (5x5) map.
     full_state_size: ClassVar[int] = (2 + 2 * TEST_MAP_SIZE ** 2 + 12 * 2 * TEST_MAP_SIZE ** 2
                                       + 5 * (WALLS_PER_ROOM + MAX_CLUTTER) * TEST_MAP_SIZE ** 2)
