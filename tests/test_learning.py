@@ -282,6 +282,21 @@ def test_checkpoint_round_trip_restores_identical_greedy_actions(tiny_twice, tmp
         assert all(np.array_equal(x, y) for x, y in zip(before, after))
 
 
+def test_a_checkpoint_whose_buffer_still_holds_next_features_restores(tiny_twice, tmp_path):
+    """Checkpoints written before the buffer dropped next_features (it stored them per transition) load
+    into today's learner: the extra field is left out, everything else comes back exactly."""
+    experiment, seeds, _, ((learners, _), _), _ = tiny_twice
+    learners = seeds.unpad(learners)
+    data = learners.buffer.data
+    old_layout = learners.replace(buffer=learners.buffer.replace(data=data.replace(
+        next_features=jnp.roll(data.features, -1, axis=1))))
+    checkpoint.save(tmp_path / "old", 3, old_layout, {"cycle": 3})
+    restored, _, _ = checkpoint.restore(tmp_path / "old", init_learners(experiment))
+    assert restored.buffer.data.next_features is None
+    as_data = lambda tree: jax.tree.leaves(tree.replace(key=jax.random.key_data(tree.key)))
+    assert all(np.array_equal(x, y) for x, y in zip(as_data(learners), as_data(restored)))
+
+
 def test_smooth_reward_is_the_papers_trailing_window():
     # Value at cycle c (1-based) = sum of the rates of cycles c-25 .. c-1, / 25.
     s = smooth(np.ones((1, 30)))
