@@ -83,7 +83,9 @@ def task_batches(config: TrainConfig) -> tuple[TaskBatch, TaskBatch]:
 
     Built once per process for equal settings and shared (read-only): every approach of an experiment
     trains and tests on the same tasks, and their host-side build (planner tables, Doorknobs' roadmaps)
-    takes 7-19 s each time. The lock makes a second worker wait for the first's build, not repeat it."""
+    takes 7-19 s each time (docs/PERFORMANCE.md). The lock makes a second worker wait for the first's
+    build, not repeat it. The tasks' host planners (the plan-table fallback) are then shared too: their
+    caches fill from both workers' callbacks, with the same entries either would compute alone."""
     with _TASKS_LOCK:
         return _build_tasks(config.env, tuple(config.seeds), config.episodes_per_cycle, config.train_steps,
                             config.num_test_tasks)
@@ -137,6 +139,11 @@ def make_seed_cycle(experiment: Experiment) -> Callable:
     approach, controls = experiment.approach, experiment.approach.controls
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train.env.num_skills
+    # One insert per cycle, in order: the buffer finds a transition's next_features in the slot after it
+    # (transitions.successor_features), which an insert larger than the buffer would overwrite.
+    if episodes * config.train_steps > config.buffer_capacity:
+        raise ValueError(f"{episodes} episodes x {config.train_steps} steps per cycle must fit the replay buffer "
+                         f"({config.buffer_capacity} transitions)")
 
     def seed_cycle(learner: Learner, train_tasks, train_tables, train_horizons, test_tasks, test_tables,
                    test_horizons) -> tuple[Learner, CycleMetrics]:

@@ -1,5 +1,7 @@
 """The learner: epsilon schedule, double-DQN targets, replay buffer, transitions, seeding, checkpoints."""
 
+from dataclasses import replace
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -7,7 +9,7 @@ import pytest
 
 from envs_jax import light_switch_door as lsd
 from envs_jax.light_switch_door import LightSwitchDoor
-from jaxbridge import checkpoint, compile_cache
+from jaxbridge import checkpoint, compile_cache, dqn
 from jaxbridge.bridges import make_bridge, random_bridge
 from jaxbridge.config import TrainConfig
 from jaxbridge.devices import SeedMesh
@@ -175,9 +177,13 @@ def test_one_transition_per_decision_and_call_planner_spans_the_plan():
     assert int(result.steps[0]) == spec.shortest_solution  # CallPlanner's transition ran the plan to the goal
 
 
-def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap_arounds():
-    """The buffer drops next_features (for_buffer) and successor_features restores them: checked against a
-    buffer that keeps them, on random-bridge episodes added one at a time into a buffer that wraps."""
+def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap_arounds(monkeypatch):
+    """The buffer drops next_features (for_buffer); successor_features restores them and relabel's targets
+    are those of a buffer that keeps them, bit for bit: random-bridge episodes added three at a time (as
+    a cycle adds its episodes) into a buffer that wraps several times, relabelled in chunks of 8 (the
+    last one padded)."""
+    chunk = 8
+    monkeypatch.setattr(dqn, "RELABEL_CHUNK", chunk)
     batch = evaluation_batch(LightSwitchDoor, [0, 1], 4)
     controls = Controls(full_state=True)  # the full state: every decision's observation differs
     result, rec = rollout(batch.env, random_bridge(batch.env), None, batch.tasks, batch.tables, batch.horizons,
@@ -186,20 +192,44 @@ def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap
     transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
         rec, result.success, batch.env.num_skills, 0.0)
     capacity = 23
+    config = TrainConfig(approach="no_feature_selection", buffer_capacity=capacity, n_target_sample=3)
+    learner = init_learner(batch.env, config, jax.random.key(3))
+    noisy = lambda params, key: jax.tree.map(lambda p: p + 0.3 * jax.random.normal(key, p.shape), params)
+    learner = learner.replace(params=noisy(learner.params, jax.random.key(1)),
+                              target_params=noisy(learner.params, jax.random.key(2)))
     full = init_buffer(jax.tree.map(lambda x: x[0, 0], transitions), capacity)
-    stored = init_buffer(for_buffer(jax.tree.map(lambda x: x[0, 0], transitions)), capacity)
-    assert stored.data.next_features is None
+    assert learner.buffer.data.next_features is None
+    flat = lambda x: x.reshape((-1,) + x.shape[2:])
     checked = differ = 0
-    for episode in range(batch.size):
-        items = jax.tree.map(lambda x: x[episode], transitions)
-        full, stored = add(full, items, valid[episode]), add(stored, for_buffer(items), valid[episode])
-        slots = np.arange(int(stored.size))
+    for first in range(0, batch.size, 3):
+        items, mask = jax.tree.map(lambda x: flat(x[first:first + 3]), transitions), flat(valid[first:first + 3])
+        full = add(full, items, mask)
+        learner = learner.replace(buffer=add(learner.buffer, for_buffer(items), mask))
+        slots = np.arange(int(learner.buffer.size))
         live = slots[~np.asarray(full.data.done)[slots]]
-        restored = np.asarray(successor_features(stored.data.features, jnp.asarray(live)))
+        restored = np.asarray(successor_features(learner.buffer.data.features, jnp.asarray(live)))
         np.testing.assert_array_equal(restored, np.asarray(full.data.next_features)[live])
         checked += len(live)
-        differ += int(np.any(restored != np.asarray(stored.data.features)[live], axis=1).sum())
+        differ += int(np.any(restored != np.asarray(learner.buffer.data.features)[live], axis=1).sum())
+
+        key = jax.random.key(first)
+        targets = np.asarray(dqn.relabel(batch.env, config, learner, key))
+        chunks = -(-capacity // chunk)
+        pad = lambda x: jnp.pad(x, [(0, chunks * chunk - capacity)] + [(0, 0)] * (x.ndim - 1))
+        padded = jax.tree.map(pad, full.data)
+        expected = np.concatenate([np.asarray(td_targets(
+            batch.env, config, learner.params, learner.target_params,
+            jax.tree.map(lambda x: x[i * chunk:(i + 1) * chunk], padded), jax.random.fold_in(key, i)))
+            for i in range(chunks)])
+        assert np.array_equal(targets[slots], expected[slots])
     assert int(valid.sum()) > 2 * capacity and checked > 2 * capacity and differ > capacity
+
+
+def test_a_cycle_whose_episodes_could_overflow_the_buffer_in_one_insert_is_refused():
+    fits = TrainConfig(num_seeds=1, num_test_tasks=2, buffer_capacity=5 * 100)
+    make_cycle(build_experiment(fits))
+    with pytest.raises(ValueError, match=r"5 episodes x 100 steps per cycle must fit the replay buffer \(499"):
+        make_cycle(build_experiment(replace(fits, buffer_capacity=499)))
 
 
 def test_different_seeds_get_different_networks_and_the_same_seed_the_same():
