@@ -9,10 +9,9 @@ nothing inside a cycle touches the host.
 """
 from __future__ import annotations
 
-import functools
 import threading
 from dataclasses import dataclass
-from functools import partial
+from functools import lru_cache, partial
 from typing import Callable
 
 import jax
@@ -68,7 +67,7 @@ class Experiment:
 _TASKS_LOCK = threading.Lock()
 
 
-@functools.lru_cache(maxsize=4)
+@lru_cache(maxsize=4)
 def _build_tasks(env: str, seeds: tuple[int, ...], episodes: int, train_steps: int,
                  num_test_tasks: int) -> tuple[TaskBatch, TaskBatch]:
     env_cls = env_class(env)

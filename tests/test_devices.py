@@ -106,4 +106,3 @@ def test_concurrent_approaches_split_the_devices_between_them():
     assert split_devices(devices, 1) == [devices]
     assert split_devices(devices[:1], 2) == [["d0"], ["d0"]]  # fewer devices than workers: all share them
     assert split_devices(None, 2) == [None, None]
-
