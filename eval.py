@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from envs_jax import ENVS
-from jaxbridge.approaches import APPROACHES
-from jaxbridge import compile_cache
-from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
+from jaxbridge.learn.approaches import APPROACHES
+from jaxbridge.utils import compile_cache
+from jaxbridge.utils.cli import UsageError, non_negative_int, positive_int, run_main
 
 SWEEP_TASKS = 10
 BRIDGE_LABELS = {"oracle": "oracle bridge", "random": "random bridge", "none": "pure planning"}
@@ -105,9 +105,9 @@ def check_render_task(args, num_tasks: int) -> None:
 
 def render(args, batch, bridge, bridge_params, controls, result, label: str) -> None:
     """Re-run the chosen evaluated episode with recording on; draw it to args.render, animate it to args.gif."""
-    from jaxbridge.animate import render_gif
-    from jaxbridge.artifacts import write_atomic
-    from jaxbridge.render import drawer_for, pick_episode, render_episode, trace_episodes
+    from jaxbridge.viz.animate import render_gif
+    from jaxbridge.utils.files import write_atomic
+    from jaxbridge.viz.render import drawer_for, pick_episode, render_episode, trace_episodes
 
     chosen = [args.render_task] if args.render_task is not None else np.flatnonzero(batch.seeds == batch.seeds[0])
     traces = trace_episodes(batch, bridge, bridge_params, chosen, args.rollout_seed, controls, expected=result)
@@ -146,7 +146,7 @@ def held_runs(experiment: Path) -> list[str]:
 
 
 def run_env(run: Path) -> str:
-    from jaxbridge.runner import load_config
+    from jaxbridge.run.runner import load_config
 
     try:
         return load_config(run).env
@@ -162,7 +162,7 @@ def sized_tasks(args, env: str):
         return None
     if env != "light_switch_door":
         raise UsageError(f"--cells/--doors apply to light_switch_door runs only, this run is {env}")
-    from envs_jax import light_switch_door as lsd
+    from envs_jax.light_switch_door import env as lsd
     if args.doors > args.cells - 1:
         raise UsageError(f"--doors must be at most cells - 1 = {args.cells - 1}, got {args.doors}")
     return lambda rng: lsd.sized_task(rng, args.cells, args.doors)
@@ -170,8 +170,8 @@ def sized_tasks(args, env: str):
 
 def evaluate(args, run: Path):
     """evaluate_run with its errors as usage errors, and a header line."""
-    from jaxbridge.checkpoint import CheckpointError
-    from jaxbridge.evaluate import evaluate_run
+    from jaxbridge.run.checkpoint import CheckpointError
+    from jaxbridge.run.evaluate import evaluate_run
 
     sized = sized_tasks(args, run_env(run))
     start = time.perf_counter()
@@ -186,7 +186,7 @@ def evaluate(args, run: Path):
 
 
 def evaluate_checkpoint(args, run: Path) -> int:
-    from jaxbridge.evaluate import format_table, summarise
+    from jaxbridge.run.evaluate import format_table, summarise
 
     config, step, batch, result, policy = evaluate(args, run)
     print(format_table(summarise(batch, result)))
@@ -198,7 +198,7 @@ def evaluate_checkpoint(args, run: Path) -> int:
 
 def compare_checkpoints(args, runs: list[Path]) -> int:
     """The same evaluation of each run, then side by side."""
-    from jaxbridge.evaluate import format_comparison, summarise
+    from jaxbridge.run.evaluate import format_comparison, summarise
 
     envs = {run_env(run) for run in runs}
     if len(envs) > 1:
@@ -214,7 +214,7 @@ def compare_checkpoints(args, runs: list[Path]) -> int:
 def sweep_lines(args) -> dict[str, Path]:
     """The sweep's lines: every approach of a lone experiment directory (unless --approach picks one),
     else one line per RUN."""
-    from jaxbridge.approaches import get_approach
+    from jaxbridge.learn.approaches import get_approach
 
     if len(args.runs) == 1 and args.approach is None and (args.runs[0] / "experiment.json").is_file():
         held = held_runs(args.runs[0])
@@ -226,10 +226,10 @@ def sweep_lines(args) -> dict[str, Path]:
 
 
 def sweep(args) -> int:
-    from jaxbridge.artifacts import write_atomic
-    from jaxbridge.checkpoint import CheckpointError
-    from jaxbridge.evaluate import load_policy
-    from jaxbridge.sweep import evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
+    from jaxbridge.utils.files import write_atomic
+    from jaxbridge.run.checkpoint import CheckpointError
+    from jaxbridge.run.evaluate import load_policy
+    from jaxbridge.run.sweep import evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
 
     args.sweep_tasks = args.sweep_tasks or SWEEP_TASKS
     out = args.sweep_out or args.runs[0]
@@ -288,10 +288,10 @@ def main(argv=None) -> int:
         return compare_checkpoints(args, [run_directory(r, args.approach) for r in args.runs])
     if args.runs:
         return evaluate_checkpoint(args, run_directory(args.runs[0], args.approach))
-    from jaxbridge.bridges import make_bridge
-    from jaxbridge.evaluate import format_table, run_bridge, summarise
-    from jaxbridge.meta_policy import Controls
-    from jaxbridge.tasks import evaluation_batch
+    from jaxbridge.core.bridges import make_bridge
+    from jaxbridge.run.evaluate import format_table, run_bridge, summarise
+    from jaxbridge.core.meta_policy import Controls
+    from jaxbridge.core.tasks import evaluation_batch
 
     env_cls = ENVS[args.env]
     seeds = list(range(args.first_seed, args.first_seed + args.num_seeds))

@@ -26,11 +26,11 @@ import sys
 from pathlib import Path
 
 from envs_jax import ENVS
-from jaxbridge.approaches import APPROACHES
-from jaxbridge import compile_cache
-from jaxbridge.cli import UsageError, non_negative_int, positive_int, run_main
-from jaxbridge.config import TrainConfig
-from jaxbridge.devices import device_count_arg, select_devices
+from jaxbridge.learn.approaches import APPROACHES
+from jaxbridge.utils import compile_cache
+from jaxbridge.utils.cli import UsageError, non_negative_int, positive_int, run_main
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.devices import device_count_arg, select_devices
 
 DEFAULTS = TrainConfig()
 # Flags that set the run's config; --resume takes the saved config instead.
@@ -137,9 +137,9 @@ def main(argv=None) -> int:
         raise UsageError(str(err)) from None
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles
     import time
-    from jaxbridge.checkpoint import CheckpointError
-    from jaxbridge.experiments import is_experiment_dir, load_experiment, train_approaches
-    from jaxbridge.runner import Interrupted, NumericalFault, load_config, prepare_run_dir, train
+    from jaxbridge.run.checkpoint import CheckpointError
+    from jaxbridge.run.experiments import is_experiment_dir, load_experiment, train_approaches
+    from jaxbridge.run.runner import Interrupted, NumericalFault, load_config, prepare_run_dir, train
 
     start = time.perf_counter()
     progress = not args.no_progress

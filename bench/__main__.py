@@ -44,9 +44,9 @@ def rss_mib() -> float:
 
 def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats: int) -> dict:
     """Every figure of one env, in this process (which should not have measured anything else)."""
-    from jaxbridge.devices import describe, select_devices
+    from jaxbridge.learn.devices import describe, select_devices
     devices = select_devices(devices_arg)
-    from jaxbridge import compile_cache
+    from jaxbridge.utils import compile_cache
     compile_cache.enable(False)
     import jax
 
@@ -54,7 +54,7 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
     from bench.training import measure_cycles
     from bench.updates import measure_updates
     from envs_jax import ENVS as ENV_CLASSES
-    from jaxbridge.config import TrainConfig
+    from jaxbridge.core.config import TrainConfig
 
     base = rss_mib()
     out = {"env": env, "devices": describe(devices), "rss_base_mib": round(base, 1)}
@@ -128,7 +128,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "bench" / "results.json", help="JSON results (default: %(default)s)")
     parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    from jaxbridge.cli import auto_or_positive_int
+    from jaxbridge.utils.cli import auto_or_positive_int
     args.devices = auto_or_positive_int(args.devices)
     quick = args.quick
     args.cycles = args.cycles or (2 if quick else 4)

@@ -21,10 +21,10 @@ from pathlib import Path
 import jax
 
 from bench.training import AUTHORS_WHOLE_RUN_S  # one seed-run of "ours", per env (results.md)
-from jaxbridge.approaches import APPROACHES
-from jaxbridge.config import TrainConfig
-from jaxbridge.devices import describe, device_count_arg, select_devices
-from jaxbridge.experiments import default_workers, train_approaches
+from jaxbridge.learn.approaches import APPROACHES
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.devices import describe, device_count_arg, select_devices
+from jaxbridge.run.experiments import default_workers, train_approaches
 
 
 def main() -> None:

@@ -11,9 +11,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from bench.sweep import print_digits, sweep_parser, swept_config, train_seeds
-from jaxbridge.meta_policy import rollout
-from jaxbridge.online import episode_params
-from jaxbridge.q_bridge import encode
+from jaxbridge.core.meta_policy import rollout
+from jaxbridge.learn.online import episode_params
+from jaxbridge.learn.q_bridge import encode
 
 
 def main() -> None:

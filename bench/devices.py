@@ -25,10 +25,10 @@ def main() -> None:
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
     args = parser.parse_args()
 
-    from jaxbridge.devices import SeedMesh, select_devices
+    from jaxbridge.learn.devices import SeedMesh, select_devices
     devices = select_devices(args.devices)  # before JAX starts: virtual CPU devices
-    from jaxbridge.config import TrainConfig
-    from jaxbridge.online import build_experiment, init_learners, make_cycle
+    from jaxbridge.core.config import TrainConfig
+    from jaxbridge.learn.online import build_experiment, init_learners, make_cycle
 
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, seed_block=args.seed_block)
     experiment = build_experiment(config)

@@ -41,10 +41,10 @@ def measure(repeats: int) -> dict:
     import jax.numpy as jnp
 
     from envs_jax.base import SkillCall
-    from envs_jax.doorknobs import Doorknobs
-    from jaxbridge.bridges import make_bridge
-    from jaxbridge.meta_policy import rollout
-    from jaxbridge.tasks import evaluation_batch
+    from envs_jax.doorknobs.env import Doorknobs
+    from jaxbridge.core.bridges import make_bridge
+    from jaxbridge.core.meta_policy import rollout
+    from jaxbridge.core.tasks import evaluation_batch
 
     batch = evaluation_batch(Doorknobs, list(range(8)))
     env, tasks, size = batch.env, batch.tasks, batch.size

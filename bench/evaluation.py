@@ -19,11 +19,12 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from envs_jax import ENVS, env_class
-from jaxbridge.config import TrainConfig
-from jaxbridge.evaluate import TrainedPolicy, load_policy
-from jaxbridge.online import seed_learners, training_env
-from jaxbridge.tasks import evaluation_batch
+from envs_jax import ENVS
+from envs_jax import env_class
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.run.evaluate import TrainedPolicy, load_policy
+from jaxbridge.learn.online import seed_learners, training_env
+from jaxbridge.core.tasks import evaluation_batch
 
 
 def fresh_policy(env: str, num_seeds: int) -> TrainedPolicy:

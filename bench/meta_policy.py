@@ -14,9 +14,9 @@ import time
 import jax
 
 from envs_jax import ENVS
-from jaxbridge.bridges import make_bridge
-from jaxbridge.meta_policy import rollout
-from jaxbridge.tasks import evaluation_batch
+from jaxbridge.core.bridges import make_bridge
+from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.tasks import evaluation_batch
 
 
 def measure(batch, repeats: int) -> dict:

@@ -10,9 +10,9 @@ import shutil
 import sys
 from pathlib import Path
 
-from jaxbridge.artifacts import REPORT_CYCLES
-from jaxbridge.comparison import write_comparison
-from jaxbridge.experiments import is_experiment_dir, load_experiment
+from jaxbridge.run.artifacts import REPORT_CYCLES
+from jaxbridge.run.comparison import write_comparison
+from jaxbridge.run.experiments import is_experiment_dir, load_experiment
 
 # reference/results.md: test solve rate, mean [min, max] over the seeds with logs; smooth reward at 100.
 AUTHORS = {

@@ -40,10 +40,10 @@ def main() -> None:
     parser.add_argument("--json", type=Path, default=None, help="also write the rows to this JSON file")
     args = parser.parse_args()
 
-    from jaxbridge.devices import describe, device_count_arg, select_devices
+    from jaxbridge.learn.devices import describe, device_count_arg, select_devices
     devices = select_devices(device_count_arg(args.devices))  # before JAX starts
     import jax
-    from jaxbridge.config import TrainConfig
+    from jaxbridge.core.config import TrainConfig
     from bench.training import measure_cycles
 
     print(f"jax {jax.__version__}, {describe(devices)} device(s): {devices[0].device_kind}", flush=True)

@@ -13,9 +13,9 @@ import time
 import numpy as np
 
 from bench.training import measure_cycles
-from jaxbridge.config import TrainConfig
-from jaxbridge.devices import select_devices
-from jaxbridge.online import Experiment
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.devices import select_devices
+from jaxbridge.learn.online import Experiment
 
 
 def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cycles: int) -> argparse.ArgumentParser:

@@ -15,9 +15,9 @@ import time
 import jax
 import numpy as np
 
-from jaxbridge.config import TrainConfig
-from jaxbridge.devices import SeedMesh, describe, device_count_arg, select_devices
-from jaxbridge.online import build_experiment, init_learners, make_cycle
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.devices import SeedMesh, describe, device_count_arg, select_devices
+from jaxbridge.learn.online import build_experiment, init_learners, make_cycle
 
 # One seed, one approach, 100 cycles (results.md); Coffee: learning time only, the run never finished.
 AUTHORS_WHOLE_RUN_S = {"light_switch_door": 17_572, "doorknobs": 21_118, "coffee": 13_900}
@@ -26,10 +26,10 @@ AUTHORS_WHOLE_RUN_S = {"light_switch_door": 17_572, "doorknobs": 21_118, "coffee
 def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None) -> dict:
     """Build `config`'s experiment with the seeds over `devices` and run `cycles` cycles (default:
     config.cycles). Returns the times (build, each cycle), what JAX compiled in the first cycle and in
-    the later ones (jaxbridge.compile_cache.CompileEvents), each cycle's mean test solve rate ("rates")
+    the later ones (jaxbridge.utils.compile_cache.CompileEvents), each cycle's mean test solve rate ("rates")
     and per seed ("seed_rates", float[seeds, cycles]), and the experiment, seed layout and final
     learners (for further measurements)."""
-    from jaxbridge import compile_cache
+    from jaxbridge.utils import compile_cache
 
     start = time.perf_counter()
     experiment = build_experiment(config)

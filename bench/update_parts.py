@@ -18,10 +18,10 @@ import jax
 import jax.numpy as jnp
 import optax
 
-from jaxbridge import dqn
-from jaxbridge.config import TrainConfig
-from jaxbridge.online import seed_learners, training_env
-from jaxbridge.q_bridge import encode
+from jaxbridge.learn import dqn
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.online import seed_learners, training_env
+from jaxbridge.learn.q_bridge import encode
 
 
 def _seconds(fn, arg) -> float:

@@ -3,7 +3,7 @@ devices, each device updating its seeds one after another, as in a cycle).
 
     python -m bench.updates [--env light_switch_door] [--num-seeds 8] [--updates 1000] [--devices auto|N]
 
-The updates are `jaxbridge.dqn.update_step` (the minibatch slots drawn up front by `minibatch_indices`; Adam step, polyak
+The updates are `jaxbridge.learn.dqn.update_step` (the minibatch slots drawn up front by `minibatch_indices`; Adam step, polyak
 step) in a `lax.scan`, as `learn` runs them; the buffer is the one after two training cycles. Not timed:
 the target relabelling that precedes them in a cycle.
 """
@@ -21,9 +21,9 @@ def measure_updates(experiment, seeds, learners, updates: int, repeats: int = 3)
     """`updates` minibatch updates of every seed of `learners` (placed on `seeds`), `repeats` timed
     calls after a compiling one. Returns compile seconds (tracing, lowering and XLA of the first call), the median seconds per call
     and updates per second over all seeds."""
-    from jaxbridge import compile_cache
+    from jaxbridge.utils import compile_cache
     from dataclasses import replace
-    from jaxbridge.dqn import minibatch_indices, update_step
+    from jaxbridge.learn.dqn import minibatch_indices, update_step
 
     env, config = experiment.train.env, experiment.config
     config = replace(config, updates_per_cycle=updates)
@@ -58,10 +58,10 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5, help="timed calls (default: %(default)s)")
     parser.add_argument("--devices", default="auto", help="as train.py (default: auto)")
     args = parser.parse_args()
-    from jaxbridge.devices import describe, device_count_arg, select_devices
+    from jaxbridge.learn.devices import describe, device_count_arg, select_devices
     devices = select_devices(device_count_arg(args.devices))
     from bench.training import measure_cycles
-    from jaxbridge.config import TrainConfig
+    from jaxbridge.core.config import TrainConfig
 
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds)
     run = measure_cycles(config, devices, cycles=2)

@@ -1,8 +1,8 @@
 """Pure-functional JAX environments with novelties, and their planner models."""
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, SkillCall, SkillSpec
-from envs_jax.coffee import Coffee
-from envs_jax.doorknobs import Doorknobs
-from envs_jax.light_switch_door import LightSwitchDoor
+from envs_jax.coffee.env import Coffee
+from envs_jax.doorknobs.env import Doorknobs
+from envs_jax.light_switch_door.env import LightSwitchDoor
 
 ENVS = {LightSwitchDoor.name: LightSwitchDoor, Doorknobs.name: Doorknobs, Coffee.name: Coffee}
 

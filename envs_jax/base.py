@@ -29,6 +29,10 @@ import numpy as np
 from flax import struct
 
 
+# Who produced a step's action, as the meta-policy records it (traces, drawings).
+ACTOR_PLANNER, ACTOR_BRIDGE, ACTOR_CALL_PLANNER = 0, 1, 2
+
+
 @dataclass(frozen=True)
 class SkillSpec:
     name: str

@@ -4,8 +4,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxbridge.bridges import make_bridge
-from jaxbridge.meta_policy import rollout
+from jaxbridge.core.bridges import make_bridge
+from jaxbridge.core.meta_policy import rollout
 
 
 def oracle_and_pure_planning(batch) -> dict:

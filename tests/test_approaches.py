@@ -8,13 +8,13 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from envs_jax.light_switch_door import LightSwitchDoor
-from jaxbridge.approaches import APPROACHES, get_approach
-from jaxbridge.bridges import random_bridge
-from jaxbridge.config import TrainConfig
-from jaxbridge.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, rollout
-from jaxbridge.online import build_experiment, init_learners, make_cycle
-from jaxbridge.tasks import evaluation_batch
+from envs_jax.light_switch_door.env import LightSwitchDoor
+from jaxbridge.learn.approaches import APPROACHES, get_approach
+from jaxbridge.core.bridges import random_bridge
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, rollout
+from jaxbridge.learn.online import build_experiment, init_learners, make_cycle
+from jaxbridge.core.tasks import evaluation_batch
 
 TINY = TrainConfig(num_seeds=1, episodes_per_cycle=2, num_test_tasks=2, updates_per_cycle=2, buffer_capacity=512)
 
@@ -99,7 +99,7 @@ def test_non_learning_approaches_never_evaluate_a_q_network(approach):
 
 
 def test_pure_planning_replans_whenever_stuck_and_solves_nothing(tests_batch):
-    from jaxbridge.bridges import pure_planning_bridge
+    from jaxbridge.core.bridges import pure_planning_bridge
     keys = jax.random.split(jax.random.key(0), tests_batch.size)
     result, records = rollout(tests_batch.env, pure_planning_bridge(tests_batch.env), None, tests_batch.tasks,
                               tests_batch.tables, tests_batch.horizons, keys, tests_batch.max_steps, record=True)

@@ -117,7 +117,7 @@ def test_eval_animates_the_episode_to_a_gif(short_run, eval_main, capsys, tmp_pa
     (["RUN", "--sweep", "novelties", "--approach", "random"], "holds no random run (it holds: ours, pure_planning)"),
 ])
 def test_eval_rejects_bad_combinations_in_one_line(short_run, eval_main, capsys, argv, message):
-    from jaxbridge.cli import run_main
+    from jaxbridge.utils.cli import run_main
     argv = [str(short_run[0]) if a == "RUN" else a for a in argv]
     assert run_main(eval_main, argv) == 2
     err = capsys.readouterr().err

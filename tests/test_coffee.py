@@ -6,12 +6,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from envs_jax import coffee_skills as skills
-from envs_jax import coffee_world as world
+from envs_jax.coffee import skills
+from envs_jax.coffee import world
 from envs_jax.base import SkillCall
-from envs_jax.coffee import CUP_ATOMS, SINGLE_ATOMS, Coffee
-from envs_jax.coffee_world import CoffeeTask
-from jaxbridge.tasks import make_batch
+from envs_jax.coffee.env import CUP_ATOMS, SINGLE_ATOMS, Coffee
+from envs_jax.coffee.world import CoffeeTask
+from jaxbridge.core.tasks import make_batch
 from planner.strips import ground
 
 from oracle_vs_planning import oracle_and_pure_planning

@@ -12,10 +12,10 @@ import jax
 import numpy as np
 import pytest
 
-from jaxbridge import checkpoint
-from jaxbridge.config import TrainConfig
-from jaxbridge.devices import SeedMesh, device_count_arg
-from jaxbridge.online import build_experiment, init_learners
+from jaxbridge.run import checkpoint
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.devices import SeedMesh, device_count_arg
+from jaxbridge.learn.online import build_experiment, init_learners
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ["--num-seeds", "3", "--cycles", "3", "--updates-per-cycle", "20", "--checkpoint-every", "1",
@@ -99,7 +99,7 @@ def test_seed_padding_round_trips():
 
 
 def test_concurrent_approaches_split_the_devices_between_them():
-    from jaxbridge.experiments import split_devices
+    from jaxbridge.run.experiments import split_devices
     devices = ["d0", "d1", "d2", "d3"]  # only their identity matters here
     assert split_devices(devices, 2) == [["d0", "d2"], ["d1", "d3"]]
     assert split_devices(devices, 3) == [["d0", "d3"], ["d1"], ["d2"]]

@@ -8,11 +8,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from envs_jax import doorknobs_maps as maps
+from envs_jax.doorknobs import maps
 from envs_jax import geometry
 from envs_jax.base import SkillCall
-from envs_jax.doorknobs import Doorknobs
-from jaxbridge.tasks import make_batch
+from envs_jax.doorknobs.env import Doorknobs
+from jaxbridge.core.tasks import make_batch
 
 from oracle_vs_planning import oracle_and_pure_planning
 

@@ -7,20 +7,23 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from envs_jax import light_switch_door as lsd
-from envs_jax.light_switch_door import LightSwitchDoor
-from jaxbridge import checkpoint, compile_cache, dqn
-from jaxbridge.bridges import make_bridge, random_bridge
-from jaxbridge.config import TrainConfig
-from jaxbridge.devices import SeedMesh
-from jaxbridge.dqn import epsilon, init_learner, learn, minibatch_indices, td_targets
-from jaxbridge.meta_policy import Controls, rollout
-from jaxbridge.online import build_experiment, init_learners, make_cycle, smooth
-from jaxbridge.q_bridge import (SPLIT_FROM_FEATURES, QNetwork, SplitInput, best_candidate, candidate_skills,
+from envs_jax.light_switch_door import env as lsd
+from envs_jax.light_switch_door.env import LightSwitchDoor
+from jaxbridge.run import checkpoint
+from jaxbridge.utils import compile_cache
+from jaxbridge.learn import dqn
+from jaxbridge.core.bridges import make_bridge, random_bridge
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.devices import SeedMesh
+from jaxbridge.learn.dqn import epsilon, init_learner, learn, minibatch_indices, td_targets
+from jaxbridge.core.meta_policy import Controls, rollout
+from jaxbridge.learn.online import build_experiment, init_learners, make_cycle
+from jaxbridge.utils.smoothing import smooth
+from jaxbridge.learn.q_bridge import (SPLIT_FROM_FEATURES, QNetwork, SplitInput, best_candidate, candidate_skills,
                                 candidates_input, encode, input_size, sample_candidates)
-from jaxbridge.replay import add, init_buffer, sample, sample_indices
-from jaxbridge.tasks import evaluation_batch, make_batch
-from jaxbridge.transitions import Transition, episode_transitions, for_buffer, successor_features
+from jaxbridge.learn.replay import add, init_buffer, sample, sample_indices
+from jaxbridge.core.tasks import evaluation_batch, make_batch
+from jaxbridge.learn.transitions import Transition, episode_transitions, for_buffer, successor_features
 
 ENV = LightSwitchDoor(5, 1)
 TINY = TrainConfig(num_seeds=2, cycles=3, updates_per_cycle=20, num_test_tasks=3, n_sample=10)
@@ -254,7 +257,7 @@ def _train(config, experiment=None, cycle=None):
 def tiny_twice():
     """TINY trained twice from scratch with one compiled cycle on one device (compiling is most of a short
     run's time; identity across processes is checked by the resume tests of test_reliability.py), with
-    the programs traced and compiled during each cycle (jax.monitoring, jaxbridge.compile_cache)."""
+    the programs traced and compiled during each cycle (jax.monitoring, jaxbridge.utils.compile_cache)."""
     experiment = build_experiment(TINY)
     seeds = SeedMesh(TINY.num_seeds)  # one device: where XLA once handed back replicated leaves
     cycle = make_cycle(experiment, seeds)
@@ -342,7 +345,7 @@ def test_a_short_learning_run_beats_the_random_bridge():
     config = TrainConfig(num_seeds=2, first_seed=1, cycles=12, updates_per_cycle=500, num_test_tasks=5)
     experiment, _, history = _train(config)
     learned = np.stack([m.test_solve_rate for m in history[-5:]]).mean(0)  # per seed, last 5 cycles
-    from jaxbridge.evaluate import run_bridge
+    from jaxbridge.run.evaluate import run_bridge
     random = run_bridge(experiment.test, make_bridge("random", experiment.test.env), seed=0).success.mean()
     assert learned.max() >= 0.8 and learned.max() > random
     assert history[-1].train_success_rate.max() > history[0].train_success_rate.max()

@@ -4,8 +4,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from envs_jax import light_switch_door as lsd
-from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchDoorTask
+from envs_jax.light_switch_door import env as lsd
+from envs_jax.light_switch_door.env import LightSwitchDoor, LightSwitchDoorTask
 
 ENV = LightSwitchDoor(max_cells=12, max_doors=3)
 TASK = LightSwitchDoorTask(num_cells=10, door_cells=(2, 5))  # robot starts in cell 0

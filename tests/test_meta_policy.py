@@ -4,11 +4,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from envs_jax import light_switch_door as lsd
-from envs_jax.light_switch_door import LightSwitchDoor
-from jaxbridge.bridges import make_bridge
-from jaxbridge.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, hashed_choice, rollout
-from jaxbridge.tasks import make_batch, evaluation_batch
+from envs_jax.light_switch_door import env as lsd
+from envs_jax.light_switch_door.env import LightSwitchDoor
+from jaxbridge.core.bridges import make_bridge
+from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, hashed_choice, rollout
+from jaxbridge.core.tasks import make_batch, evaluation_batch
 from planner.tables import compile_task, stack_tables
 
 SEEDS = list(range(8))

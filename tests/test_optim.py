@@ -11,10 +11,10 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from jaxbridge.config import TrainConfig
-from jaxbridge.devices import SeedMesh
-from jaxbridge.dqn import make_optimizer
-from jaxbridge.optim import clipped_adam
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.devices import SeedMesh
+from jaxbridge.learn.dqn import make_optimizer
+from jaxbridge.learn.optim import clipped_adam
 
 MAX_NORM, LR = 5.0, 1e-3
 

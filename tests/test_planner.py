@@ -11,10 +11,10 @@ from pyperplan import search
 from pyperplan.heuristics.lm_cut import LmCutHeuristic
 from pyperplan.planner import search_plan
 
-from envs_jax import doorknobs_maps
-from envs_jax import light_switch_door as lsd
-from envs_jax.coffee import Coffee
-from envs_jax.doorknobs import Doorknobs
+from envs_jax.doorknobs import maps as doorknobs_maps
+from envs_jax.light_switch_door import env as lsd
+from envs_jax.coffee.env import Coffee
+from envs_jax.doorknobs.env import Doorknobs
 from planner.search import NO_OPERATOR, UNREACHABLE, BitOperator, HostPlanner, optimal_policy
 from planner.strips import domain_pddl, ground, problem_pddl
 from planner.tables import bits_to_words, compile_task, host_lookup, table_lookup, words_to_bits

@@ -15,10 +15,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxbridge import checkpoint
-from jaxbridge.config import TrainConfig
-from jaxbridge.online import build_experiment, init_learners
-from jaxbridge.runner import NumericalFault, prepare_run_dir, train
+from jaxbridge.run import checkpoint
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.online import build_experiment, init_learners
+from jaxbridge.run.runner import NumericalFault, prepare_run_dir, train
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ["--num-seeds", "2", "--cycles", "6", "--updates-per-cycle", "50", "--checkpoint-every", "1", "--no-progress",

@@ -12,10 +12,10 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from PIL import Image
 
-from envs_jax.coffee import Coffee
-from envs_jax.doorknobs import Doorknobs
-from envs_jax.light_switch_door import LightSwitchDoor
-from jaxbridge.animate import (
+from envs_jax.coffee.env import Coffee
+from envs_jax.doorknobs.env import Doorknobs
+from envs_jax.light_switch_door.env import LightSwitchDoor
+from jaxbridge.viz.animate import (
     FRAME_DPI,
     _caption_and_target,
     control_changes,
@@ -24,22 +24,13 @@ from jaxbridge.animate import (
     frame_steps,
     render_gif,
 )
-from jaxbridge.bridges import make_bridge
-from jaxbridge.episode_trace import bridge_choices, skill_label
-from jaxbridge.evaluate import run_bridge
-from jaxbridge.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER
-from jaxbridge.render import (
-    ACTORS,
-    EpisodeFigure,
-    EpisodeTrace,
-    actor_segments,
-    draw_path,
-    drawer_for,
-    pick_episode,
-    render_episode,
-    trace_episodes,
-)
-from jaxbridge.tasks import make_batch
+from jaxbridge.core.bridges import make_bridge
+from envs_jax.base import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER
+from envs_jax.drawing import ACTORS, EpisodeTrace, actor_segments, draw_path
+from jaxbridge.run.evaluate import run_bridge
+from jaxbridge.viz.episodes import bridge_choices, pick_episode, skill_label
+from jaxbridge.viz.render import EpisodeFigure, drawer_for, render_episode, trace_episodes
+from jaxbridge.core.tasks import make_batch
 
 P, B, C = ACTOR_PLANNER, ACTOR_BRIDGE, ACTOR_CALL_PLANNER
 ROOT = Path(__file__).resolve().parents[1]
@@ -165,7 +156,7 @@ def test_coffee_oracle_episode_shows_the_bridge_twisting_the_jug_and_renders(cof
      "--render-task must be below 2"),
 ])
 def test_eval_render_flags_reject_bad_values_in_one_line(eval_main, capsys, argv, message):
-    from jaxbridge.cli import run_main
+    from jaxbridge.utils.cli import run_main
     assert run_main(eval_main, argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and message in err and err.count("\n") == 1

@@ -10,9 +10,9 @@ import pytest
 from oracle_vs_planning import oracle_and_pure_planning
 
 from envs_jax import ENVS
-from jaxbridge.config import TrainConfig
-from jaxbridge.meta_policy import EpisodeResult
-from jaxbridge.sweep import SweepResult, evaluate_sweep, plot_sweep, sweep_batch, sweep_csv, sweep_markdown, sweep_tasks
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.meta_policy import EpisodeResult
+from jaxbridge.run.sweep import SweepResult, evaluate_sweep, plot_sweep, sweep_batch, sweep_csv, sweep_markdown, sweep_tasks
 
 NOVELTIES = {  # how each env's task shows its number of novelty instances
     "light_switch_door": lambda spec: len(spec.door_cells),

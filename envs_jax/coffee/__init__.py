@@ -1,0 +1,4 @@
+"""Coffee: fill cups from a jug whose handle is rotated away from the robot (reference/envs.md §4)."""
+from envs_jax.coffee.env import Coffee
+
+__all__ = ["Coffee"]

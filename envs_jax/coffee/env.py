@@ -1,0 +1,212 @@
+"""Coffee (the authors' `coffee`), as specified in reference/envs.md §4.
+
+A robot arm (x, y, z, tilt, wrist, fingers) must fill every cup on the table: pick the jug up by its
+handle, place it in the coffee machine, press the machine's button (the jug fills), pick the jug up
+again and pour into each cup. The novelty: the jug starts rotated (rot = 1.5), and the grasp needs
+|rot| < pi/3. The planner's model has no predicate about the rotation, so its PickJug closes the fingers
+at the handle, fails to grasp and gets stuck. The bridge must move above the jug (MoveToTwistJug), twist
+it (TwistJug), and hand back to the planner.
+
+Tasks: the training task has 1 cup; each of a seed's 10 test tasks draws 1-4 cups uniformly
+(`coffee_world.test_tasks`). Everything is padded to 4 cups.
+
+Test horizon: 110 steps, the smallest multiple of 10 with which the oracle bridge solves every test
+task of seeds 0-7 (its longest episode there takes 101 steps, on a 4-cup task; a test checks both). The
+authors' 100 (with 4 cups in every task) would cut that one episode short by a step. Training episodes:
+100 steps, as the authors' (1 cup: the oracle needs 58 at most).
+
+Skills finish when they make no progress (see `coffee_skills`), instead of the authors' class-level flag.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import jax
+import jax.numpy as jnp
+
+from envs_jax.coffee import skills
+from envs_jax.coffee import world
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
+from envs_jax.coffee.world import MAX_CUPS, CoffeeTask, State, Task
+from planner.strips import Domain, LiftedOperator, Problem
+
+TRAIN_STEPS = 100
+ROBOT, JUG, MACHINE = "robby", "juggy", "coffee_machine"
+# Fluent atoms about the robot, jug and machine, then three per cup slot (layout of `abstract`).
+SINGLE_ATOMS = ("Holding", "JugInMachine", "MachineOn", "OnTable", "HandEmpty", "JugFilled", "Twisting",
+                "PressingButton", "NotAboveCup")
+CUP_ATOMS = ("CupFilled", "JugAboveCup", "RobotAboveCup")
+
+
+def _operators() -> tuple[LiftedOperator, ...]:
+    r, j, m, c, other = ("?robot", "robot"), ("?jug", "jug"), ("?machine", "machine"), ("?cup", "cup"), \
+        ("?other", "cup")
+    holding, hand_empty, on_table = ("Holding", "?robot", "?jug"), ("HandEmpty", "?robot"), ("OnTable", "?jug")
+    in_machine, twisting = ("JugInMachine", "?jug", "?machine"), ("Twisting", "?robot", "?jug")
+    pressing = ("PressingButton", "?robot", "?machine")
+    above = lambda cup: (("JugAboveCup", "?jug", cup), ("RobotAboveCup", "?robot", cup))
+    return (
+        # The twist pair cancels out in the model, so the planner never twists; only the bridge does.
+        LiftedOperator("MoveToTwistJug", (r, j), pre=(on_table, hand_empty), add=(twisting,),
+                       delete=(hand_empty,), skill="MoveToTwistJug"),
+        LiftedOperator("TwistJug", (r, j), pre=(on_table, twisting), add=(hand_empty,), delete=(twisting,),
+                       skill="TwistJug"),
+        LiftedOperator("PickJugFromTable", (r, j), pre=(on_table, hand_empty), add=(holding,),
+                       delete=(on_table, hand_empty), skill="PickJug"),
+        LiftedOperator("PlaceJugInMachine", (r, j, m), pre=(holding,), add=(hand_empty, in_machine),
+                       delete=(holding,), skill="PlaceJugInMachine"),
+        LiftedOperator("TurnMachineOn", (r, j, m), pre=(hand_empty, in_machine),
+                       add=(("JugFilled", "?jug"), ("MachineOn", "?machine"), pressing), delete=(),
+                       skill="TurnMachineOn"),
+        LiftedOperator("PickJugFromMachine", (r, j, m), pre=(hand_empty, in_machine, pressing), add=(holding,),
+                       delete=(hand_empty, in_machine, pressing), skill="PickJug"),
+        LiftedOperator("PourFromNowhere", (r, j, c),
+                       pre=(holding, ("JugFilled", "?jug"), ("NotAboveCup", "?robot", "?jug")),
+                       add=above("?cup") + (("CupFilled", "?cup"),), delete=(("NotAboveCup", "?robot", "?jug"),),
+                       skill="Pour", slot_param="?cup"),
+        LiftedOperator("PourFromOtherCup", (r, j, c, other),
+                       pre=(holding, ("JugFilled", "?jug")) + above("?other") + (("NotSameCup", "?cup", "?other"),),
+                       add=above("?cup") + (("CupFilled", "?cup"),), delete=above("?other"),
+                       skill="Pour", slot_param="?cup"),
+    )
+
+
+DOMAIN = Domain(
+    name="coffee",
+    types=("robot", "jug", "machine", "cup"),
+    predicates={"CupFilled": ("cup",), "Holding": ("robot", "jug"), "JugInMachine": ("jug", "machine"),
+                "MachineOn": ("machine",), "OnTable": ("jug",), "HandEmpty": ("robot",), "JugFilled": ("jug",),
+                "RobotAboveCup": ("robot", "cup"), "JugAboveCup": ("jug", "cup"), "NotAboveCup": ("robot", "jug"),
+                "Twisting": ("robot", "jug"), "PressingButton": ("robot", "machine"), "NotSameCup": ("cup", "cup")},
+    operators=_operators(),
+)
+
+
+@dataclass(frozen=True)
+class Coffee(NoveltyEnv):
+    """The env at a fixed capacity: at most `max_cups` cups per task."""
+
+    max_cups: int = MAX_CUPS
+
+    name = "coffee"
+    skills = (SkillSpec("MoveToTwistJug"), SkillSpec("TwistJug", -1.0, 1.0), SkillSpec("PickJug"),
+              SkillSpec("PlaceJugInMachine"), SkillSpec("TurnMachineOn"), SkillSpec("Pour"))
+    action_dim = 6  # normalised (dx, dy, dz, dtilt, dwrist, dfingers)
+    num_features = 5  # the jug: |dx|, |dy| from the robot, rot, held, filled
+    # "No feature selection": robot 6, jug 5, machine 1, then 5 per cup, padded to 4 cups.
+    full_state_size: ClassVar[int] = 6 + 5 + 1 + 5 * MAX_CUPS
+    domain = DOMAIN
+    train_task = staticmethod(world.train_task)
+    novelty_sweep = NoveltySweep("cups", "to fill after twisting the jug", world.SWEEP_CUPS, world.sweep_task,
+                                 world.sweep_horizon)
+    test_tasks = staticmethod(world.test_tasks)
+    train_steps = TRAIN_STEPS
+    # 250 minibatch updates per cycle instead of 1000 (docs/RESULTS.md, Coffee; 8-seed 100-cycle sweeps of
+    # seeds 0-7 and 8-15). A cycle yields only 10-82 bridge decisions (median 35), and 1000 updates x batch
+    # 256 refit that small buffer dozens of times per cycle: over 16 seeds the paper's settings learned more slowly
+    # (mean test solve rate 0.84 at cycle 10 against 0.96) and drifted more late (lowest mean from cycle 50
+    # 0.93 against 0.98; seed 6 fell to 0-0.2 for cycles 43-67), at 1.6x the time. The authors' +0.5
+    # CallPlanner bonus and clip_bootstrap were measured too and are left off: with 1000 updates the bonus
+    # let 4 of seeds 8-15 collapse for 5-45 cycles, on top of 250 updates it made seed 13 drift (42
+    # seed-cycles below 0.9 after cycle 50 on seeds 8-15, against 6), clip_bootstrap gained nothing, and
+    # neither separates the one near-tie left (CallPlanner at the jug top, where the planner twists with
+    # its uniform sampler, against TwistJug then CallPlanner): both end in the same CallPlanner reward.
+    train_defaults: ClassVar[dict] = {"updates_per_cycle": 250}
+
+    @property
+    def full_state_fits(self) -> bool:
+        return self.max_cups <= MAX_CUPS
+
+    def drawer(self):
+        from envs_jax.coffee.drawer import DRAWER  # matplotlib: only when drawing
+        return DRAWER
+
+    @classmethod
+    def for_tasks(cls, specs: list[CoffeeTask]) -> Coffee:
+        return cls(max_cups=max(len(s.cups) for s in specs))
+
+    # ---- host: task arrays and the planner's problem ---------------------------------------------
+    def task_arrays(self, spec: CoffeeTask) -> Task:
+        return world.task_arrays(spec, self.max_cups)
+
+    def planner_problem(self, spec: CoffeeTask) -> Problem:
+        cups = [f"cup{i}" for i in range(len(spec.cups))]
+        objects = {ROBOT: "robot", JUG: "jug", MACHINE: "machine", **{c: "cup" for c in cups}}
+        static = frozenset(("NotSameCup", a, b) for a in cups for b in cups if a != b)
+        init = frozenset({("OnTable", JUG), ("HandEmpty", ROBOT), ("NotAboveCup", ROBOT, JUG)})
+        return Problem(DOMAIN, objects, static, init, frozenset(("CupFilled", c) for c in cups))
+
+    @property
+    def num_atoms(self) -> int:
+        return len(SINGLE_ATOMS) + len(CUP_ATOMS) * self.max_cups
+
+    @property
+    def num_slots(self) -> int:
+        return self.max_cups  # Pour's slot is its cup; the other skills have one ground instance
+
+    def atom_index(self, atom) -> int:
+        if atom[0] in SINGLE_ATOMS:
+            return SINGLE_ATOMS.index(atom[0])
+        return len(SINGLE_ATOMS) + CUP_ATOMS.index(atom[0]) * self.max_cups + self.object_slot(atom[-1])
+
+    def object_slot(self, name: str) -> int:
+        return int(name.removeprefix("cup")) if name.startswith("cup") else 0
+
+    # ---- device: dynamics and predicates -----------------------------------------------------------
+    def reset(self, task: Task) -> State:
+        return world.reset(task)
+
+    def step(self, state: State, action: jax.Array) -> State:
+        return world.step(state, action)
+
+    def abstract(self, state: State) -> jax.Array:
+        in_machine, above = world.jug_in_machine(state), world.jug_above_cup(state)
+        singles = jnp.stack([state.jug_held, in_machine, state.machine_on, world.on_table(state),
+                             world.hand_empty(state), state.jug_filled, world.twisting(state),
+                             world.pressing_button(state), ~jnp.any(above)])
+        return jnp.concatenate([singles, world.cup_filled(state), above, above])
+
+    def goal_reached(self, state: State) -> jax.Array:
+        return world.goal_reached(state)
+
+    def state_vector(self, state: State) -> jax.Array:
+        return skills.state_vector(state)
+
+    def features(self, state: State, stuck_state: State) -> jax.Array:
+        """envs.md §4.8: always the jug, relative to the robot."""
+        offset = jnp.abs(state.jug_xy - state.robot[:2])
+        return jnp.concatenate([offset, jnp.stack([state.jug_rot, state.jug_held, state.jug_filled])
+                                .astype(jnp.float32)])
+
+    def full_state(self, state: State) -> jax.Array:
+        """float32[32]: robot (x, y, z, tilt, wrist, fingers); jug (x, y, rot, held, filled); machine (on);
+        per cup (x, y, capacity, target, current), zeros for absent cups, padded to 4 cups."""
+        if not self.full_state_fits:
+            raise ValueError(f"the full-state observation holds at most {MAX_CUPS} cups; this env has {self.max_cups}")
+        task = state.task
+        jug = jnp.concatenate([state.jug_xy, jnp.stack([state.jug_rot, state.jug_held, state.jug_filled])
+                               .astype(jnp.float32)])
+        cups = jnp.concatenate([task.cup_xy, jnp.stack([task.cup_capacity, task.cup_target, state.cup_liquid], -1)],
+                               -1)
+        cups = jnp.where(task.cup_mask[:, None], cups, 0.0).reshape(-1)
+        vector = jnp.concatenate([state.robot, jug, state.machine_on[None].astype(jnp.float32), cups])
+        return jnp.pad(vector, (0, self.full_state_size - vector.shape[0]))
+
+    # ---- device: skills ---------------------------------------------------------------------------
+    def skill_action(self, state: State, call: SkillCall) -> jax.Array:
+        return skills.skill_action(state, call)
+
+    def skill_done(self, prev_state: State, state: State, call: SkillCall) -> jax.Array:
+        return skills.skill_done(prev_state, state, call)
+
+    # ---- the hand-written bridge used as an oracle in tests and eval ----------------------------
+    def oracle_bridge(self, params, obs, key):
+        """While the jug on the table is rotated out of the grasp's reach: move to the jug top, then twist
+        it to rot 0 (TwistJug rises when done); then CallPlanner."""
+        rot, held = obs.features[2], obs.features[3]
+        misrotated = (held < 0.5) & (jnp.abs(rot) >= world.PICK_JUG_ROT_TOL)
+        at_top = obs.num_ground[skills.TWIST_JUG] > 0  # TwistJug's precondition: Twisting
+        skill = jnp.where(misrotated, jnp.where(at_top, skills.TWIST_JUG, skills.MOVE_TO_TWIST_JUG),
+                          self.num_skills)
+        return BridgeAction(skill=jnp.int32(skill), param=jnp.float32(0.0))

@@ -1,0 +1,334 @@
+"""The planner/bridge meta-policy: the paper's Algorithm 1 as a `lax.scan` over env steps.
+
+Per env step, for a whole batch of episodes (any mix of seeds and tasks):
+
+1. observe: abstract the state; the episode ends at the goal or the horizon.
+2. plan: the planner looks up the next operator of an optimal plan from the current abstract state
+   (in-graph table; host planner on a miss, only on steps where some episode misses).
+3. planner turn: when its skill has finished, the planner checks that the atoms its model predicted
+   hold, then starts the next operator's skill. It is *stuck* if they do not hold, if it has no plan,
+   or if the low-level state did not change since its last step (a blocked move). Stuck hands control
+   to the bridge at this same state (detection itself costs no env step).
+4. bridge turn: when its skill has finished, the bridge picks an applicable ground skill or CallPlanner
+   (applicable once the state changed since the bridge took over). Evaluated only on steps where some
+   episode decides, so a costly learned bridge is not paid while planners act.
+5. execute: CallPlanner emits one zero action and gives control back to a fresh plan from the current
+   state; otherwise the running skill's action is applied.
+
+Everything is branch-free (`jnp.where`), so it runs unchanged under `vmap`, `jit` and sharding.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+from flax import struct
+
+from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, BridgeObs, NoveltyEnv, SkillCall,
+                           idle_call, tree_where)
+from jaxbridge.core.bridges import Bridge
+from planner.tables import PlanLookup, PlanTable, batched_plan_lookup, holds_all, num_words, pack_atoms
+
+PLANNER, BRIDGE = 0, 1  # who is in control of an episode
+
+
+@dataclass(frozen=True)
+class Controls:
+    """Which parts of the meta-policy an approach uses (static: each combination compiles once).
+
+    The paper's ablations switch these off (reference/method.md §6); everything else is shared."""
+
+    planner: bool = True  # False: pure RL, the bridge acts from the first step and nothing plans
+    call_planner: bool = True  # False: no CallPlanner; once stuck, the bridge keeps control
+    full_state: bool = False  # the bridge sees every object's raw features instead of the selected ones
+
+
+def observation_size(env: NoveltyEnv, controls: Controls) -> int:
+    return env.full_state_size if controls.full_state else env.num_features
+
+
+def observation(env: NoveltyEnv, controls: Controls, state: Any, stuck_state: Any) -> jax.Array:
+    """What the bridge sees: the env's object-centric features, or the full padded state."""
+    return env.full_state(state) if controls.full_state else env.features(state, stuck_state)
+
+
+@struct.dataclass
+class Episode:
+    env_state: Any
+    stuck_state: Any  # the state at which control last passed to the bridge
+    t: jax.Array  # int32: env steps taken
+    horizon: jax.Array  # int32
+    done: jax.Array  # bool
+    success: jax.Array  # bool
+    control: jax.Array  # int32: PLANNER or BRIDGE
+    call: SkillCall  # the skill being executed
+    expected: jax.Array  # uint32[W]: atoms the model predicts after the planner's operator (0 = none)
+    prev_vec: jax.Array  # float32[D]: low-level state before the previous step
+    planner_stepped: jax.Array  # bool: the current plan's policy acted on the previous step
+    bridge_vec: jax.Array  # float32[D]: low-level state when the bridge took over (for CanPlan)
+    planner_calls: jax.Array  # int32: plans made (the first one, then one per CallPlanner)
+    table_misses: jax.Array  # int32: lookups answered by the host planner
+    bridge_decisions: jax.Array  # int32: choices made by the bridge, CallPlanner included
+    stuck_events: jax.Array  # int32
+
+
+@struct.dataclass
+class Decision:
+    """The bridge's choice for one episode, grounded on the task's objects."""
+
+    skill: jax.Array  # int32; num_skills = CallPlanner
+    slot: jax.Array  # int32
+    param: jax.Array  # float32
+    features: jax.Array  # float32[F]: what the bridge saw
+    num_ground: jax.Array  # int32[num_skills + 1]: what it could choose from (CallPlanner last)
+
+
+@struct.dataclass
+class StepRecord:
+    """One env step of one episode (traces for learning, rendering and tests)."""
+
+    live: jax.Array  # bool: the step happened (episode not over)
+    actor: jax.Array  # int32: ACTOR_*
+    decided: jax.Array  # bool: the bridge chose an action at this step
+    stuck: jax.Array  # bool: the planner got stuck at this step's state
+    skill: jax.Array  # int32: skill executed (num_skills for CallPlanner)
+    slot: jax.Array  # int32
+    param: jax.Array  # float32
+    features: jax.Array  # float32[F]: the bridge's observation (at decisions; zeros otherwise)
+    num_ground: jax.Array  # int32[num_skills + 1]: its applicable actions (at decisions)
+    env_state: Any  # state before the step
+
+    @property
+    def can_plan(self) -> jax.Array:
+        """CallPlanner was applicable (at decisions)."""
+        return self.num_ground[..., -1] > 0
+
+
+@struct.dataclass
+class EpisodeResult:
+    success: jax.Array
+    steps: jax.Array
+    planner_calls: jax.Array
+    table_misses: jax.Array
+    bridge_decisions: jax.Array
+    stuck_events: jax.Array
+
+
+def same_state(a: jax.Array, b: jax.Array) -> jax.Array:
+    """The authors' repeated-state test (numpy allclose defaults)."""
+    return jnp.all(jnp.abs(a - b) <= 1e-8 + 1e-5 * jnp.abs(b))
+
+
+def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.Array) -> Episode:
+    """The planner starts in control with a plan from the initial state (without a planner, the bridge
+    starts)."""
+    state = env.reset(task)
+    vec = env.state_vector(state)
+    zero = jnp.int32(0)
+    return Episode(env_state=state, stuck_state=state, t=zero, horizon=jnp.int32(horizon),
+                   done=jnp.bool_(False), success=jnp.bool_(False),
+                   control=jnp.int32(PLANNER if controls.planner else BRIDGE),
+                   call=idle_call(), expected=jnp.zeros(num_words(env.num_atoms), jnp.uint32),
+                   prev_vec=vec, planner_stepped=jnp.bool_(False), bridge_vec=vec,
+                   planner_calls=jnp.int32(int(controls.planner)), table_misses=zero, bridge_decisions=zero,
+                   stuck_events=zero)
+
+
+def observe(env: NoveltyEnv, ep: Episode):
+    """Abstract the state and close the episode at the goal or the horizon."""
+    goal = env.goal_reached(ep.env_state)
+    ep = ep.replace(success=ep.success | (~ep.done & goal), done=ep.done | goal | (ep.t >= ep.horizon))
+    need_plan = ~ep.done & (ep.control == PLANNER) & ~ep.call.running
+    return ep, pack_atoms(env.abstract(ep.env_state)), need_plan
+
+
+def applicable_ops(env: NoveltyEnv, table: PlanTable, key: jax.Array, state: Any) -> jax.Array:
+    """bool[O]: ground operators whose preconditions hold and whose skill can start.
+
+    These are the bridge's ground actions (the authors' applicable ground NSRTs)."""
+    pre_hold = holds_all(table.op_pre, key[None, :])
+    return table.op_valid & pre_hold & env.skill_initiable(state, table.op_skill, table.op_slot)
+
+
+def count_by_skill(env: NoveltyEnv, table: PlanTable, op_ok: jax.Array) -> jax.Array:
+    """int32[num_skills]: applicable ground operators of each skill."""
+    of_skill = table.op_skill[None, :] == jnp.arange(env.num_skills)[:, None]
+    return jnp.sum(of_skill & op_ok[None, :], axis=-1, dtype=jnp.int32)
+
+
+def hashed_choice(mask: jax.Array, bits: jax.Array) -> jax.Array:
+    """A uniformly random set entry of `mask` (0 if none), from one random uint32.
+
+    Each index gets a score from an integer hash of (bits, index) (the murmur3 finaliser) in the high
+    bits and its own index in the low bits, so one plain max picks the winner (no ties): on CPU much
+    cheaper than a uniform per entry, an argmax, or a cumulative-sum search."""
+    n = mask.shape[-1]
+    index_bits = max(1, (n - 1).bit_length())
+    index = jnp.arange(n, dtype=jnp.uint32)
+    x = bits ^ (index * jnp.uint32(0x9E3779B9))
+    x = (x ^ (x >> 16)) * jnp.uint32(0x85EBCA6B)
+    x = (x ^ (x >> 13)) * jnp.uint32(0xC2B2AE35)
+    x = x ^ (x >> 16)
+    score = ((x >> index_bits) << index_bits) | index
+    best = jnp.max(jnp.where(mask, score, jnp.uint32(0)))
+    return (best & jnp.uint32((1 << index_bits) - 1)).astype(jnp.int32)
+
+
+def planner_turn(env: NoveltyEnv, ep: Episode, key: jax.Array, plan: PlanLookup, table: PlanTable,
+                 u_param: jax.Array) -> tuple[Episode, jax.Array]:
+    """Follow the plan; on stuck hand control to the bridge; say whether the bridge must choose."""
+    state, live = ep.env_state, ~ep.done
+    vec = env.state_vector(state)
+    planning = live & (ep.control == PLANNER)
+    repeated = planning & ep.planner_stepped & same_state(vec, ep.prev_vec)
+    needs_op = planning & ~ep.call.running
+    can_continue = plan.found & (plan.op >= 0) & holds_all(ep.expected, key)
+    stuck = repeated | (needs_op & ~can_continue)
+    start_op = needs_op & ~stuck
+
+    op = jnp.maximum(plan.op, 0)
+    skill = table.op_skill[op]
+    planner_call = SkillCall(skill=skill, slot=table.op_slot[op], param=env.param_from_uniform(skill, u_param),
+                             running=jnp.bool_(True), steps=jnp.int32(0))
+    abandoned = ep.call.replace(running=ep.call.running & ~stuck)
+    ep = ep.replace(
+        call=tree_where(start_op, planner_call, abandoned),
+        expected=jnp.where(start_op, plan.next_key, ep.expected),
+        control=jnp.where(stuck, BRIDGE, ep.control),
+        stuck_state=tree_where(stuck, state, ep.stuck_state),
+        bridge_vec=jnp.where(stuck, vec, ep.bridge_vec),
+        table_misses=ep.table_misses + (plan.miss & needs_op),
+        stuck_events=ep.stuck_events + stuck,
+    )
+    decide = live & (ep.control == BRIDGE) & ~ep.call.running
+    return ep, decide
+
+
+def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any, ep: Episode,
+                table: PlanTable, key: jax.Array, rng: jax.Array, choice_bits: jax.Array) -> Decision:
+    """The bridge observes, chooses a skill and parameter, and the choice is grounded uniformly at
+    random among the applicable ground operators of that skill (the Q-function does not see objects).
+    CallPlanner is applicable once the state changed since the bridge took over (and never without it)."""
+    state = ep.env_state
+    vec = env.state_vector(state)
+    op_ok = applicable_ops(env, table, key, state)
+    can_plan = ~same_state(vec, ep.bridge_vec) & controls.call_planner
+    num_ground = jnp.concatenate([count_by_skill(env, table, op_ok), can_plan[None].astype(jnp.int32)])
+    obs = BridgeObs(features=observation(env, controls, state, ep.stuck_state), num_ground=num_ground)
+    choice = bridge(params, obs, rng)
+    skill = jnp.clip(choice.skill, 0, env.num_skills if controls.call_planner else env.num_skills - 1)
+    op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)
+    return Decision(skill=skill.astype(jnp.int32), slot=table.op_slot[op], param=choice.param,
+                    features=obs.features, num_ground=num_ground)
+
+
+def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
+            stuck: jax.Array) -> tuple[Episode, StepRecord]:
+    """Start the bridge's decision if it made one, then take one env step."""
+    state, live = ep.env_state, ~ep.done
+    call_planner = decide & (decision.skill >= env.num_skills)
+    start_skill = decide & ~call_planner
+    bridge_call = SkillCall(skill=decision.skill, slot=decision.slot, param=decision.param,
+                            running=jnp.bool_(True), steps=jnp.int32(0))
+    call = tree_where(start_skill, bridge_call, ep.call)
+
+    action = jnp.where(call_planner, 0.0, env.skill_action(state, call))  # CallPlanner: a no-op step
+    next_state = tree_where(live, env.step(state, action), state)
+    finished = env.skill_done(state, next_state, call)
+    planner_acted = live & (ep.control == PLANNER)
+    actor = jnp.where(call_planner, ACTOR_CALL_PLANNER, jnp.where(planner_acted, ACTOR_PLANNER, ACTOR_BRIDGE))
+    record = StepRecord(live=live, actor=actor, decided=decide, stuck=stuck,
+                        skill=jnp.where(call_planner, env.num_skills, call.skill), slot=call.slot,
+                        param=call.param, features=decision.features, num_ground=decision.num_ground,
+                        env_state=state)
+    ep = ep.replace(
+        env_state=next_state,
+        t=ep.t + live,
+        call=call.replace(running=live & ~call_planner & call.running & ~finished,
+                          steps=call.steps + live),
+        control=jnp.where(call_planner, PLANNER, ep.control),
+        expected=jnp.where(call_planner, jnp.zeros_like(ep.expected), ep.expected),
+        prev_vec=env.state_vector(state),
+        planner_stepped=planner_acted,  # False after CallPlanner: the new plan starts fresh
+        planner_calls=ep.planner_calls + call_planner,
+        bridge_decisions=ep.bridge_decisions + decide,
+    )
+    return ep, record
+
+
+def step_randomness(keys: jax.Array, max_steps: int):
+    """All of a rollout's randomness, drawn up front in two batched calls (per-step draws of a few
+    numbers are dominated by PRNG call overhead on CPU): per step and episode, two uniforms (planner
+    parameter), random bits (grounding the bridge's choice) and a key for the bridge. An episode's draws
+    depend only on its own key, whatever else is in the batch."""
+    def per_episode(key):
+        k_uniform, k_bits, k_bridge = jax.random.split(key, 3)
+        return (jax.random.uniform(k_uniform, (max_steps,)),
+                jax.random.bits(k_bits, (max_steps,), jnp.uint32), jax.random.split(k_bridge, max_steps))
+
+    return jax.tree.map(lambda x: jnp.swapaxes(x, 0, 1), jax.vmap(per_episode)(keys))
+
+
+def no_plan(num_episodes: int, words: int) -> PlanLookup:
+    return PlanLookup(found=jnp.zeros(num_episodes, bool), op=jnp.full(num_episodes, -1, jnp.int32),
+                      next_key=jnp.zeros((num_episodes, words), jnp.uint32), miss=jnp.zeros(num_episodes, bool))
+
+
+@partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls"))
+def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, tasks: Any, tables: PlanTable,
+            horizons: jax.Array, keys: jax.Array, max_steps: int, record: bool = False,
+            controls: Controls = Controls()):
+    """Run the meta-policy on a batch of B episodes for at most `max_steps` env steps.
+
+    tasks, tables, horizons, keys (one per episode) and bridge_params (None, or a pytree) carry a
+    leading batch axis B. `controls` picks the approach's parts of the meta-policy.
+    Returns EpisodeResult[B] and, with `record`, StepRecord[max_steps, B].
+    """
+    num_episodes = horizons.shape[0]
+    episodes = jax.vmap(partial(start_episode, env, controls))(tasks, horizons)
+    no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
+                           param=jnp.zeros(num_episodes, jnp.float32),
+                           features=jnp.zeros((num_episodes, observation_size(env, controls)), jnp.float32),
+                           num_ground=jnp.zeros((num_episodes, env.num_skills + 1), jnp.int32))
+
+    def step(episodes: Episode, randomness):
+        param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]
+        episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
+        if controls.planner:
+            plan = batched_plan_lookup(tables, packed, need_plan)
+        else:  # pure RL: the control never returns to a planner, nothing is looked up
+            plan = no_plan(num_episodes, packed.shape[-1])
+        stuck_before = episodes.stuck_events
+        episodes, decide = jax.vmap(partial(planner_turn, env))(episodes, packed, plan, tables,
+                                                                param_uniforms)
+        decision = jax.lax.cond(  # the bridge only runs on steps where some episode must choose
+            jnp.any(decide),
+            lambda: jax.vmap(partial(bridge_turn, env, controls, bridge))(bridge_params, episodes, tables, packed,
+                                                                           bridge_keys, choice_bits),
+            lambda: no_decision)
+        stuck = episodes.stuck_events > stuck_before
+        episodes, rec = jax.vmap(partial(execute, env))(episodes, decide, decision, stuck)
+        return episodes, (rec if record else None)
+
+    randomness = step_randomness(keys, max_steps)
+    if record:  # the records are one row per step: every step runs
+        episodes, records = jax.lax.scan(step, episodes, randomness)
+    else:  # stop once every episode is done: the steps after it change none of the results
+        def more(carry):
+            t, episodes = carry
+            return (t < max_steps) & ~jnp.all(episodes.done)
+
+        def one_step(carry):
+            t, episodes = carry
+            return t + 1, step(episodes, jax.tree.map(lambda r: r[t], randomness))[0]
+
+        _, episodes = jax.lax.while_loop(more, one_step, (jnp.int32(0), episodes))
+        records = None
+    episodes, *_ = jax.vmap(partial(observe, env))(episodes)  # the goal test on the final state
+    result = EpisodeResult(success=episodes.success, steps=episodes.t,
+                           planner_calls=episodes.planner_calls, table_misses=episodes.table_misses,
+                           bridge_decisions=episodes.bridge_decisions, stuck_events=episodes.stuck_events)
+    return result, records

@@ -1,0 +1,59 @@
+"""The paper's six approaches, each a configuration of the same machinery (reference/method.md §6).
+
+An approach is which bridge acts when the plan is stuck (the learned Q bridge, a random one, or none),
+which parts of the meta-policy it uses (`Controls`: planner, CallPlanner, feature selection) and
+whether it learns. Everything else (envs, planner tables, rollout, transitions, double DQN, metrics) is
+shared, so a difference in results is the approach's defining difference and nothing more.
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+from envs_jax.base import NoveltyEnv
+from jaxbridge.core.bridges import Bridge, pure_planning_bridge, random_bridge
+from jaxbridge.core.meta_policy import Controls
+from jaxbridge.learn.q_bridge import QNetwork, make_q_bridge
+
+
+@dataclass(frozen=True)
+class Approach:
+    name: str
+    label: str  # as in the paper's figures
+    bridge: str  # "q": the learned bridge; "random": uniformly random; "none": re-plan when stuck
+    controls: Controls = Controls()
+    description: str = ""
+
+    @property
+    def learns(self) -> bool:
+        return self.bridge == "q"
+
+    @functools.lru_cache(maxsize=64)
+    def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int) -> Bridge:
+        """The approach's bridge; one object per (env, net, n_sample), so that programs compiled for it
+        (the bridge is a static argument of the rollout) serve every later call with equal arguments."""
+        if self.bridge == "q":
+            return make_q_bridge(env, net, n_sample)
+        return random_bridge(env) if self.bridge == "random" else pure_planning_bridge(env)
+
+
+APPROACHES = {a.name: a for a in (
+    Approach("ours", "ours", "q", Controls(),
+             "bridge policy learning: object-centric features, CallPlanner"),
+    Approach("no_feature_selection", "no feature selection", "q", Controls(full_state=True),
+             "the bridge sees every object's raw features, padded to the env's largest task"),
+    Approach("no_callplanner", "no CallPlanner", "q", Controls(call_planner=False),
+             "no CallPlanner action: once stuck, the bridge keeps control for the episode"),
+    Approach("random", "random bridge", "random", Controls(),
+             "a uniformly random applicable action (CallPlanner included) whenever stuck; no learning"),
+    Approach("pure_planning", "pure planning", "none", Controls(),
+             "the planner alone, re-planning whenever stuck; no learning"),
+    Approach("maple_q", "Maple Q (pure RL)", "q", Controls(planner=False, call_planner=False, full_state=True),
+             "pure RL, no planner: full state, actions grounded on each task's objects"),
+)}
+
+
+def get_approach(name: str) -> Approach:
+    if name not in APPROACHES:
+        raise ValueError(f"unknown approach {name!r}; choose from {', '.join(APPROACHES)}")
+    return APPROACHES[name]

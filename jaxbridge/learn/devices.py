@@ -1,0 +1,162 @@
+"""The seed axis over devices: which devices (`--devices auto|N`), the mesh over them, padding the
+seeds to a multiple of the device count, and the program each device runs on its block of seeds.
+
+Why every device runs a *per-seed* program (one seed after another, `lax.map`), not a `vmap` over its
+block: XLA compiles the same per-seed math differently for different batch shapes (measured: in the
+Adam step, `nu / bias_correction` became `nu * (1 / bias_correction)` when a seed axis of size 2 was
+present, but stayed a division for one seed), so a seed's numbers would change in the last bits with
+the number of seeds on its device, and training amplifies that. Here the compiled per-seed computation
+is the same whatever the device count (1, 2, many; CPU or GPU) and whatever the other seeds are, with
+`optimization_barrier`s at its edges so that XLA cannot fuse it with the surrounding slicing. Seeds
+are padded (repeating the last seed) to a multiple of the device count; padded slots skip the work
+(a real `cond` on a per-slot flag) and are dropped from the results.
+
+`seed_block` B > 1 trades that for width: each device runs blocks of B seeds `vmap`ped together, one
+block after another. A GPU needs the width (one small seed at a time leaves it nearly idle). The
+numbers then depend on B (the compiled per-block program) but still not on the device count or on
+which seeds share a block; seeds are padded to a multiple of devices x B, and padded slots of a block
+compute alongside the real ones (under `vmap` the `cond` runs both branches) and are dropped.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+AXIS = "seeds"
+CPU_FLAG = "xla_force_host_platform_device_count"
+
+
+def device_count_arg(text: str) -> str | int:
+    """argparse type of --devices: "auto" or a positive integer."""
+    from jaxbridge.utils.cli import auto_or_positive_int
+    return auto_or_positive_int(text)
+
+
+def cpu_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
+
+
+def _backend_started() -> bool:
+    try:
+        from jax._src import xla_bridge
+        return xla_bridge.backends_are_initialized()
+    except (ImportError, AttributeError):
+        return True  # cannot tell: do not touch the config
+
+
+def select_devices(request: str | int = "auto") -> list:
+    """The local devices to shard the seeds over: `auto` = all of them, else the first `request`.
+
+    On CPU, JAX has one device unless told otherwise before its backend starts: this sets
+    `jax_num_cpu_devices` (auto: one per core) if the backend has not started yet and XLA_FLAGS does
+    not already set --xla_force_host_platform_device_count. Other platforms (GPU, TPU) are unaffected.
+    Raises ValueError if fewer than `request` devices exist."""
+    if not _backend_started() and CPU_FLAG not in os.environ.get("XLA_FLAGS", ""):
+        jax.config.update("jax_num_cpu_devices", cpu_cores() if request == "auto" else int(request))
+    devices = jax.local_devices()
+    if request == "auto":
+        return devices
+    if request > len(devices):
+        kind = devices[0].platform.upper()
+        hint = (" (CPU devices are fixed when JAX starts; this process started it with fewer)"
+                if kind == "CPU" else "")
+        raise ValueError(f"--devices {request}: only {len(devices)} {kind} device(s) here{hint}")
+    return devices[:request]
+
+
+def describe(devices) -> str:
+    """E.g. "2 cpu"."""
+    kinds = sorted({d.platform for d in devices})
+    return f"{len(devices)} {'+'.join(kinds)}"
+
+
+@dataclass(frozen=True)
+class SeedMesh:
+    """`num_seeds` seeds laid out over `devices`: seed i lives in slot i; slots num_seeds..padded-1
+    pad the seed axis to a multiple of the device count."""
+
+    num_seeds: int
+    devices: tuple = field(default_factory=lambda: tuple(jax.local_devices()[:1]))
+    block: int = 1  # seeds vmapped together on a device (TrainConfig.seed_block)
+
+    def __post_init__(self):
+        if self.block < 1:
+            raise ValueError(f"seed block must be at least 1, got {self.block}")
+
+    @property
+    def num_devices(self) -> int:
+        return len(self.devices)
+
+    @property
+    def padded(self) -> int:
+        width = self.num_devices * self.block
+        return -(-self.num_seeds // width) * width
+
+    @property
+    def mesh(self) -> Mesh:
+        return Mesh(np.asarray(self.devices), (AXIS,))
+
+    @property
+    def sharding(self) -> NamedSharding:
+        return NamedSharding(self.mesh, PartitionSpec(AXIS))
+
+    def pad(self, tree: Any) -> Any:
+        """Leading axis num_seeds -> padded, by repeating the last seed."""
+        extra = self.padded - self.num_seeds
+        if not extra:
+            return tree
+        return jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)]), tree)
+
+    def place(self, tree: Any) -> Any:
+        """Pad a per-seed pytree and shard its seed axis over the devices."""
+        return jax.device_put(self.pad(tree), self.sharding)
+
+    def unpad(self, tree: Any) -> Any:
+        """The real seeds of a placed pytree, on one device (the layout checkpoints use, whatever the
+        device count)."""
+        return jax.device_put(jax.tree.map(lambda x: x[: self.num_seeds], tree), jax.local_devices()[0])
+
+    def real(self) -> jax.Array:
+        """bool[padded], placed: which slots hold a real seed."""
+        return jax.device_put(np.arange(self.padded) < self.num_seeds, self.sharding)
+
+    def map_seeds(self, fn: Callable) -> Callable:
+        """`fn(state, *inputs) -> (state, out)` for one seed, lifted to every seed: the returned
+        function takes (real, states, *inputs), each with a leading padded seed axis sharded over the
+        devices, and returns (states, outs) likewise. Padded slots return their state unchanged and
+        zero outputs. The per-seed (per-block) computation compiles to the same code for any device
+        count."""
+
+        def one_seed(args):
+            is_real, state, inputs = args
+
+            def run(state, inputs):
+                state, inputs = jax.lax.optimization_barrier((state, inputs))
+                return jax.lax.optimization_barrier(fn(state, *inputs))
+
+            def skip(state, inputs):
+                out = jax.eval_shape(fn, state, *inputs)[1]
+                return state, jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), out)
+
+            return jax.lax.cond(is_real, run, skip, state, inputs)
+
+        block = self.block
+
+        def per_device(real, states, *inputs):
+            if block == 1:
+                return jax.lax.map(one_seed, (real, states, inputs))
+            blocks = jax.tree.map(lambda x: x.reshape((-1, block) + x.shape[1:]), (real, states, inputs))
+            out = jax.lax.map(jax.vmap(one_seed), blocks)
+            return jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:]), out)
+
+        spec = PartitionSpec(AXIS)
+        return jax.shard_map(per_device, mesh=self.mesh, in_specs=spec, out_specs=spec, check_vma=False)

@@ -1,0 +1,190 @@
+"""The learned bridge: a Q-function over (object-centric features, skill, parameter), as in MapleQ.
+
+Q input = features(s) ++ one_hot(skill over the env's skills + CallPlanner) ++ [param]. The greedy
+action is the argmax over every applicable skill with `n_sample` parameters drawn from its sampler
+(one for skills whose sampler is a constant) and CallPlanner when applicable. Training explores
+epsilon-greedily with the random bridge.
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, tree_where
+from jaxbridge.core.bridges import Bridge, random_bridge
+
+
+@struct.dataclass
+class SplitInput:
+    """A network input given as its two parts: `observation` [..., F] and `action` [..., A], the
+    observation's leading axes broadcastable to the action's (one observation, many candidate actions).
+    The first layer then computes the observation's share once rather than once per action; same
+    parameters as for the concatenated input [..., F + A], same function up to float rounding."""
+
+    observation: jax.Array
+    action: jax.Array
+
+
+class UniformDense(nn.Module):
+    """Dense layer initialised as PyTorch's nn.Linear (the authors' network): weights and biases
+    uniform in +-scale/sqrt(fan_in)."""
+
+    features: int
+    scale: float = 1.0
+
+    @nn.compact
+    def __call__(self, x: jax.Array | SplitInput) -> jax.Array:
+        split = isinstance(x, SplitInput)
+        fan_in = x.observation.shape[-1] + x.action.shape[-1] if split else x.shape[-1]
+        bound = self.scale / np.sqrt(fan_in)
+        init = lambda key, shape: jax.random.uniform(key, shape, jnp.float32, -bound, bound)
+        kernel = self.param("kernel", init, (fan_in, self.features))
+        bias = self.param("bias", init, (self.features,))
+        if split:
+            width = x.observation.shape[-1]
+            return x.observation @ kernel[:width] + (x.action @ kernel[width:] + bias)
+        return x @ kernel + bias
+
+
+LEAKY_SLOPE = 0.01
+
+
+def _mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int]) -> jax.Array:
+    for size in hidden_sizes:
+        x = nn.leaky_relu(UniformDense(size)(x), LEAKY_SLOPE)
+    return UniformDense(1, scale=0.0)(x)[..., 0]
+
+
+class _Member(nn.Module):
+    hidden_sizes: Sequence[int]
+
+    @nn.compact
+    def __call__(self, carry: None, x: jax.Array | SplitInput) -> tuple[None, jax.Array]:
+        return carry, _mlp(x, self.hidden_sizes)
+
+
+class QNetwork(nn.Module):
+    """MLP with leaky-ReLU hidden layers and a scalar output; optionally an ensemble of such MLPs whose
+    value is their minimum (clipped double Q).
+
+    Two departures from the authors' plain ReLU network, both measured (docs/RESULTS.md): with sparse
+    rewards nearly every target is 0 at first, and fitting them switched most ReLUs of the second layer
+    off for good (9% alive after a few cycles on seed 0), leaving a constant Q that never fitted the few
+    rewarded transitions. A leaky slope keeps every unit trainable; the output layer starts at zero, so
+    the untrained Q is 0 everywhere (the authors' untrained Q is too).
+
+    With `ensemble` > 1, independently initialised members are fitted to the same targets and Q is
+    their minimum, in the greedy argmax and in the targets alike: where the members disagree (features
+    or parameters unlike the training data) the value is the pessimistic one, so the argmax over many
+    sampled parameters no longer picks one member's upward error (docs/RESULTS.md, Doorknobs)."""
+
+    hidden_sizes: Sequence[int] = (32, 32)
+    ensemble: int = 1
+
+    @nn.compact
+    def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
+        """Q of x[..., input] (or of a SplitInput): [...], or every member's, [ensemble, ...], with
+        `members`."""
+        if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
+            q = _mlp(x, self.hidden_sizes)[None]
+        else:
+            # Members one after another (a scan over their stacked parameters), not vmapped: a member
+            # axis inside the per-seed program made XLA compile the gradient differently with the
+            # number of devices (docs/RELIABILITY.md); each member alone compiles as the plain network.
+            members_scan = nn.scan(_Member, variable_axes={"params": 0}, split_rngs={"params": True},
+                                   in_axes=nn.broadcast, length=self.ensemble)
+            _, q = members_scan(self.hidden_sizes)(None, x)
+        return q if members else jnp.min(q, axis=0)
+
+
+def input_size(env: NoveltyEnv, num_features: int) -> int:
+    """Observation ++ one-hot over the skills and CallPlanner ++ one parameter."""
+    return num_features + env.num_skills + 1 + 1
+
+
+def encode_action(env: NoveltyEnv, skill: jax.Array, param: jax.Array) -> jax.Array:
+    """The action's part of the Q-network input: one_hot(skill) ++ [param]; broadcasts."""
+    shape = jnp.broadcast_shapes(skill.shape, param.shape)
+    one_hot = jax.nn.one_hot(skill, env.num_skills + 1)
+    return jnp.concatenate([jnp.broadcast_to(one_hot, shape + one_hot.shape[-1:]),
+                            jnp.broadcast_to(param, shape)[..., None]], axis=-1)
+
+
+def encode(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Array) -> jax.Array:
+    """The Q-network input for (features, skill, param); broadcasts over leading axes."""
+    action = encode_action(env, skill, param)
+    shape = jnp.broadcast_shapes(features.shape[:-1], action.shape[:-1])
+    return jnp.concatenate([jnp.broadcast_to(features, shape + features.shape[-1:]),
+                            jnp.broadcast_to(action, shape + action.shape[-1:])], axis=-1)
+
+
+# Observations at least this wide (the full-state ablations: 32 to 2027 values) go into the candidates'
+# Q as a SplitInput: their first-layer share is computed once per decision, not once per candidate
+# (Doorknobs: 2027 x 32 multiply-adds for each of 103 candidates). The object-centric features (4 to
+# 7 values) are evaluated whole: measured no faster split, and their published runs keep their bits.
+SPLIT_FROM_FEATURES = 32
+
+
+def candidates_input(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Array
+                     ) -> jax.Array | SplitInput:
+    """The Q-network input for one observation `features` [F] and candidates (skill, param) [C]."""
+    if features.shape[-1] >= SPLIT_FROM_FEATURES:
+        return SplitInput(features, encode_action(env, skill, param))
+    return encode(env, features, skill, param)
+
+
+def candidate_skills(env: NoveltyEnv, n_sample: int) -> np.ndarray:
+    """Static list of candidate skills: n_sample copies of each skill with a uniform sampler, one of
+    each constant-parameter skill, then CallPlanner."""
+    counts = [n_sample if s.param_low != s.param_high else 1 for s in env.skills]
+    return np.array(sum(([k] * c for k, c in enumerate(counts)), []) + [env.num_skills], np.int32)
+
+
+def sample_candidates(env: NoveltyEnv, skills: np.ndarray, key: jax.Array) -> jax.Array:
+    """float32[C]: a parameter for each candidate from its skill's sampler (0 for CallPlanner).
+
+    Stratified: the j-th of a skill's n candidates is uniform in the j-th n-quantile of the sampler's
+    range. Each sample is still uniform over the range when its stratum is picked at random, but the n
+    samples cover the range evenly, so a narrow good interval (a door key's +-0.1) is never missed by
+    chance. (The authors drew the n samples independently.)"""
+    _, first, counts = np.unique(skills, return_index=True, return_counts=True)
+    stratum = np.arange(len(skills)) - np.repeat(first, counts)
+    size = np.repeat(counts, counts)
+    u = (stratum + jax.random.uniform(key, skills.shape)) / size
+    is_env_skill = skills < env.num_skills
+    return jnp.where(is_env_skill, env.param_from_uniform(np.minimum(skills, env.num_skills - 1), u), 0.0)
+
+
+def best_candidate(env: NoveltyEnv, net: QNetwork, q_params: Any, features: jax.Array, num_ground: jax.Array,
+                   skills: np.ndarray, key: jax.Array) -> tuple[BridgeAction, jax.Array]:
+    """argmax over the applicable candidates of Q(features, skill, param); also returns the max Q."""
+    params = sample_candidates(env, skills, key)
+    q = net.apply(q_params, candidates_input(env, features, jnp.asarray(skills), params))
+    q = jnp.where(num_ground[skills] > 0, q, -jnp.inf)
+    best = jnp.argmax(q)
+    return BridgeAction(skill=jnp.asarray(skills)[best], param=params[best]), q[best]
+
+
+@struct.dataclass
+class QBridgeParams:
+    q: Any  # network parameters
+    epsilon: jax.Array  # float32: exploration rate (0 = greedy)
+
+
+def make_q_bridge(env: NoveltyEnv, net: QNetwork, n_sample: int) -> Bridge:
+    """Epsilon-greedy Q bridge; with epsilon 0 it is the greedy bridge used at test time."""
+    skills = candidate_skills(env, n_sample)
+    explore_with = random_bridge(env)
+
+    def act(params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
+        k_explore, k_random, k_greedy = jax.random.split(key, 3)
+        greedy, _ = best_candidate(env, net, params.q, obs.features, obs.num_ground, skills, k_greedy)
+        explore = jax.random.uniform(k_explore) < params.epsilon
+        return tree_where(explore, explore_with(None, obs, k_random), greedy)
+
+    return act

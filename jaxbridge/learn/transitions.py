@@ -1,0 +1,65 @@
+"""From rollout records to MDP transitions: one transition per bridge decision.
+
+A transition runs from one bridge decision to the next decision of the same episode, or to the
+episode's end. So a CallPlanner transition spans the whole planner rollout after it (to the goal, the
+next stuck state, or the end of the episode): the paper's atomic CallPlanner. Reward 1 when the goal is
+reached within the transition (plus an optional CallPlanner bonus); the goal ends the MDP, and so does
+the time limit, without bootstrapping.
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from flax import struct
+
+from jaxbridge.core.meta_policy import StepRecord
+
+
+@struct.dataclass
+class Transition:
+    features: jax.Array  # float32[F]
+    skill: jax.Array  # int32 (num_skills = CallPlanner)
+    param: jax.Array  # float32
+    reward: jax.Array  # float32
+    done: jax.Array  # bool: no bootstrapping from next_* (goal reached or episode over)
+    next_features: jax.Array  # float32[F]
+    next_num_ground: jax.Array  # int32[num_skills + 1]: applicable actions at the next decision
+
+
+def episode_transitions(records: StepRecord, success: jax.Array, call_planner_skill: int,
+                        call_planner_bonus: float = 0.0) -> tuple[Transition, jax.Array]:
+    """Transitions of one episode (records over time, [T]); returns (Transition[T], valid[T])."""
+    steps = records.decided.shape[0]
+    decided = records.decided & records.live
+    index = jnp.arange(steps)
+    # next_decision[t] = first decision strictly after t, or `steps` if none.
+    later = jnp.where(decided, index, steps)
+    suffix_min = jax.lax.cummin(later, reverse=True)
+    next_decision = jnp.concatenate([suffix_min[1:], jnp.array([steps])])
+    has_next = next_decision < steps
+    nxt = jnp.minimum(next_decision, steps - 1)
+    goal = ~has_next & success  # the episode ended at the goal during this transition
+    bonus = jnp.where(records.skill == call_planner_skill, call_planner_bonus, 0.0)
+    transition = Transition(
+        features=records.features, skill=records.skill, param=records.param,
+        reward=jnp.where(goal, 1.0 + bonus, 0.0).astype(jnp.float32), done=~has_next,
+        next_features=records.features[nxt], next_num_ground=records.num_ground[nxt])
+    return transition, decided
+
+
+def for_buffer(transitions: Transition) -> Transition:
+    """Transitions as the replay buffer keeps them: without next_features, which `successor_features`
+    reads back from the features stored after them. A full-state observation is wide (Doorknobs: 2027
+    values, 265 MB per seed for 32768 transitions), so this halves the buffer, its copies and its
+    checkpoints."""
+    return transitions.replace(next_features=None)
+
+
+def successor_features(features: jax.Array, slots: jax.Array) -> jax.Array:
+    """next_features of the transitions stored at `slots` of a buffer's `features` [capacity, F].
+
+    An episode's transitions are stored in order, in one insert: a transition that is not done is
+    followed (modulo the capacity) by its episode's next decision, whose features are exactly its
+    next_features, and FIFO overwriting reaches a slot before the one after it. For a done transition
+    the next slot holds something unrelated, which never counts (no bootstrapping past `done`)."""
+    return features[(slots + 1) % features.shape[0]]

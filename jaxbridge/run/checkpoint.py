@@ -1,0 +1,120 @@
+"""Orbax checkpoints of the whole learner state (networks, target, optimizer, replay buffer, keys,
+counters) plus a JSON record (config, cycle, metrics so far), each sealed by a SHA-256 manifest.
+
+The manifest is written (atomically) only after orbax has finished, so a checkpoint without one was
+cut short (a crash mid-save) and is skipped; a checkpoint whose files no longer match their manifest
+(flipped bytes, truncation) is refused rather than loaded.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import threading
+from pathlib import Path
+from typing import Any
+
+import jax
+import orbax.checkpoint as ocp
+from orbax.checkpoint import checkpoint_managers
+
+from jaxbridge.utils.files import write_atomic
+
+KEEP = 2
+
+
+class CheckpointError(Exception):
+    """A checkpoint is missing, incomplete, corrupted or does not fit this run."""
+
+
+def _manager(directory: Path) -> ocp.CheckpointManager:
+    options = ocp.CheckpointManagerOptions(preservation_policy=checkpoint_managers.LatestN(n=KEEP), create=True)
+    return ocp.CheckpointManager(Path(directory).absolute(), options=options)
+
+
+def _manifest_path(directory: Path, step: int) -> Path:
+    return Path(directory) / f"{step}.sha256.json"
+
+
+def _digests(step_dir: Path) -> dict[str, str]:
+    return {str(p.relative_to(step_dir)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(step_dir.rglob("*")) if p.is_file()}
+
+
+# Orbax keeps the id of "the current save" in a process-wide counter, which its background threads
+# read to find their completion signals. Two saves at once (approaches trained in worker threads) can
+# read each other's id and wait for a signal that never comes: measured, both saves hung 300 s and the
+# run died with a TimeoutError. Saves (a few ms at our sizes) therefore take turns.
+_SAVING = threading.Lock()
+
+
+def save(directory: Path, step: int, state: Any, record: dict) -> None:
+    with _SAVING:
+        _save(Path(directory), step, state, record)
+
+
+def _save(directory: Path, step: int, state: Any, record: dict) -> None:
+    with _manager(directory) as mgr:
+        mgr.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state),
+                                               record=ocp.args.JsonSave(record)))
+        mgr.wait_until_finished()
+        kept = set(mgr.all_steps())
+    write_atomic(_manifest_path(directory, step), json.dumps(_digests(directory / str(step))))
+    for old in directory.glob("*.sha256.json"):  # manifests of checkpoints orbax has dropped
+        if int(old.name.split(".")[0]) not in kept:
+            old.unlink()
+
+
+def sealed_steps(directory: Path) -> list[int]:
+    """Steps with a complete checkpoint and its manifest, oldest first."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        return []
+    return sorted(int(p.name) for p in directory.iterdir()
+                  if p.is_dir() and p.name.isdigit() and _manifest_path(directory, int(p.name)).is_file())
+
+
+def verify(directory: Path, step: int) -> None:
+    directory = Path(directory)
+    expected = json.loads(_manifest_path(directory, step).read_text())
+    actual = _digests(directory / str(step))
+    if actual != expected:
+        changed = sorted(set(expected) ^ set(actual) | {k for k in expected if actual.get(k) != expected[k]})
+        raise CheckpointError(f"checkpoint {directory / str(step)} is corrupted or truncated "
+                              f"({', '.join(changed[:3])}{' ...' if len(changed) > 3 else ''} changed); refusing to load it")
+
+
+def _sealed_step(directory: Path, step: int | None) -> int:
+    """The latest sealed checkpoint's step (or `step`), verified against its manifest."""
+    steps = sealed_steps(directory)
+    if step is None:
+        if not steps:
+            raise CheckpointError(f"no complete checkpoint in {directory}")
+        step = steps[-1]
+    elif step not in steps:
+        raise CheckpointError(f"no complete checkpoint for step {step} in {directory}")
+    verify(directory, step)
+    return step
+
+
+def read_record(directory: Path, step: int | None = None) -> tuple[dict, int]:
+    """The JSON record (config, cycle, metrics) of the latest sealed checkpoint (or `step`), without
+    the state: cheap enough to check that a checkpoint belongs to a run before building the run."""
+    directory = Path(directory)
+    step = _sealed_step(directory, step)
+    with _manager(directory) as mgr:
+        return mgr.restore(step, args=ocp.args.Composite(record=ocp.args.JsonRestore())).record, step
+
+
+def restore(directory: Path, like: Any, step: int | None = None) -> tuple[Any, dict, int]:
+    """Restore the state (shaped like `like`), its JSON record and its step: the latest sealed
+    checkpoint unless `step` is given. Raises CheckpointError if there is none or it is damaged."""
+    directory = Path(directory)
+    step = _sealed_step(directory, step)
+    abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, like)
+    try:
+        with _manager(directory) as mgr:
+            restored = mgr.restore(step, args=ocp.args.Composite(state=ocp.args.StandardRestore(abstract),
+                                                                 record=ocp.args.JsonRestore()))
+    except (ValueError, KeyError, TypeError) as err:  # shapes or structure of another config
+        raise CheckpointError(f"checkpoint {directory / str(step)} does not fit this run: {err}") from None
+    return restored.state, restored.record, step

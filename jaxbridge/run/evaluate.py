@@ -1,0 +1,166 @@
+"""Evaluate a bridge on every seed's test tasks and summarise per seed."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import jax
+import numpy as np
+
+from envs_jax import env_class
+from jaxbridge.learn.approaches import Approach, get_approach
+from jaxbridge.core.bridges import Bridge
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.meta_policy import Controls, EpisodeResult, rollout
+from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
+
+
+@dataclass
+class SeedSummary:
+    seed: int
+    tasks: int
+    solve_rate: float
+    mean_steps: float
+    planner_calls: float  # per task
+    table_misses: int
+    bridge_decisions: float  # per task
+    stuck_events: float  # per task: novelties met (the planner got stuck)
+    task_size: str  # e.g. "11 cells, 3 doors"; "N different tasks" when the seed's tasks differ
+
+
+def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0,
+               controls: Controls = Controls()) -> EpisodeResult:
+    """One rollout of every task in the batch (bridge_params: None or batched over tasks)."""
+    result, _ = rollout(batch.env, bridge, bridge_params, batch.tasks, batch.tables, batch.horizons,
+                        jax.random.split(jax.random.key(seed), batch.size), batch.max_steps, controls=controls)
+    return jax.tree.map(np.asarray, result)
+
+
+def summarise(batch: TaskBatch, result: EpisodeResult) -> list[SeedSummary]:
+    rows = []
+    for seed in dict.fromkeys(batch.seeds.tolist()):
+        mine = batch.seeds == seed
+        rows.append(SeedSummary(
+            seed=int(seed), tasks=int(mine.sum()), solve_rate=float(result.success[mine].mean()),
+            mean_steps=float(result.steps[mine].mean()),
+            planner_calls=float(result.planner_calls[mine].mean()),
+            table_misses=int(result.table_misses[mine].sum()),
+            bridge_decisions=float(result.bridge_decisions[mine].mean()),
+            stuck_events=float(result.stuck_events[mine].mean()),
+            task_size=_describe([s for s, m in zip(batch.specs, mine) if m])))
+    return rows
+
+
+def _describe(specs: list) -> str:
+    """The seed's task size if all its tasks share it (Light Switch Door draws it once per seed), else a
+    count (Doorknobs maps differ task by task; `eval.py --render` shows one)."""
+    sizes = {s.describe() for s in specs}
+    return sizes.pop() if len(sizes) == 1 else f"{len(sizes)} different tasks"
+
+
+def format_table(rows: list[SeedSummary]) -> str:
+    header = (f"{'seed':>4}  {'task size':<20} {'tasks':>5}  {'solve rate':>10}  {'mean steps':>10}  "
+              f"{'planner calls/task':>18}  {'stuck/task':>10}  {'bridge decisions/task':>21}  {'table misses':>12}")
+    lines = [header, "-" * len(header)]
+    for r in rows:
+        lines.append(f"{r.seed:>4}  {r.task_size:<20} {r.tasks:>5}  {r.solve_rate:>10.2f}  {r.mean_steps:>10.1f}  "
+                     f"{r.planner_calls:>18.1f}  {r.stuck_events:>10.1f}  {r.bridge_decisions:>21.1f}  {r.table_misses:>12d}")
+    n = sum(r.tasks for r in rows)
+    mean = lambda f: sum(f(r) * r.tasks for r in rows) / n
+    lines.append("-" * len(header))
+    lines.append(f"{'all':>4}  {'':<20} {n:>5}  {mean(lambda r: r.solve_rate):>10.2f}  "
+                 f"{mean(lambda r: r.mean_steps):>10.1f}  {mean(lambda r: r.planner_calls):>18.1f}  "
+                 f"{mean(lambda r: r.stuck_events):>10.1f}  "
+                 f"{mean(lambda r: r.bridge_decisions):>21.1f}  {sum(r.table_misses for r in rows):>12d}")
+    return "\n".join(lines)
+
+
+@dataclass
+class TrainedPolicy:
+    """A run's latest checkpoint as greedy bridges (one per seed) that run on any batch of its env's tasks."""
+
+    config: TrainConfig
+    step: int  # the checkpoint's cycle
+    learners: Any  # stacked over config.seeds
+
+    @property
+    def approach(self) -> Approach:
+        return get_approach(self.config.approach)
+
+    def can_see(self, env) -> bool:
+        """False where the approach's input cannot hold the env's tasks (the full-state ablations are
+        sized to the largest test task)."""
+        return env.full_state_fits or not self.approach.controls.full_state
+
+    def on(self, batch: TaskBatch) -> tuple[Bridge, Any, Controls]:
+        """(bridge, per-episode greedy params, controls) for the batch: each episode gets its seed's network."""
+        from jaxbridge.learn.dqn import q_network
+        from jaxbridge.learn.online import episode_params
+
+        index = {seed: i for i, seed in enumerate(self.config.seeds)}
+        if not set(batch.seeds.tolist()) <= index.keys():
+            raise ValueError(f"the batch has tasks of seeds this run did not train ({self.config.seeds})")
+        owner = np.array([index[s] for s in batch.seeds.tolist()])
+        bridge = self.approach.make_bridge(batch.env, q_network(self.config), self.config.n_sample)
+        greedy = episode_params(self.learners, owner, np.zeros(len(owner), np.float32))
+        return bridge, greedy, self.approach.controls
+
+    def run(self, batch: TaskBatch, seed: int = 0) -> EpisodeResult:
+        bridge, greedy, controls = self.on(batch)
+        return run_bridge(batch, bridge, greedy, seed, controls)
+
+
+def load_policy(run_dir) -> TrainedPolicy:
+    """The greedy policy of a run directory's latest checkpoint (CheckpointError/ValueError if unusable)."""
+    from jaxbridge.run.runner import load_learners
+
+    config, learners, step = load_learners(Path(run_dir))
+    return TrainedPolicy(config, step, learners)
+
+
+def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
+    """Greedy evaluation of a run's latest checkpoint on each seed's test tasks, or on tasks drawn by
+    `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed). Also returns the greedy
+    policy it ran, (bridge, per-episode params, controls), so an episode can be re-run and drawn."""
+    policy = load_policy(run_dir)
+    config, env_cls = policy.config, env_class(policy.config.env)
+    if sized_specs is None:
+        batch = evaluation_batch(env_cls, config.seeds, config.num_test_tasks)
+    else:
+        specs, owners = [], []
+        for s in config.seeds:
+            rng = np.random.default_rng(s + 20000)
+            specs += [sized_specs(rng) for _ in range(num_tasks)]
+            owners += [s] * num_tasks
+        batch = make_batch(env_cls, specs, owners)
+    bridge, greedy, controls = policy.on(batch)
+    result = run_bridge(batch, bridge, greedy, seed, controls)
+    return config, policy.step, batch, result, (bridge, greedy, controls)
+
+
+def format_comparison(evaluations: dict[str, list[SeedSummary]]) -> str:
+    """Several evaluations side by side, one row per seed (blank where a run lacks the seed): solve
+    rate, mean steps and bridge decisions per task of each, then the all-seed means."""
+    labels = list(evaluations)
+    width = max(24, *(len(label) for label in labels))
+    seeds = sorted({r.seed for rows in evaluations.values() for r in rows})
+    by_seed = {label: {r.seed: r for r in rows} for label, rows in evaluations.items()}
+    cols = lambda r: f"{r.solve_rate:>6.2f} {r.mean_steps:>7.1f} {r.bridge_decisions:>9.1f}"
+    blank = " " * len(cols(SeedSummary(0, 0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, "")))
+    lines = ["seed  " + "  ".join(f"{label:>{width}}" for label in labels),
+             "      " + "  ".join(f"{'solve   steps decisions':>{width}}" for _ in labels)]
+    lines.append("-" * len(lines[0]))
+    for seed in seeds:
+        cells = [cols(by_seed[l][seed]) if seed in by_seed[l] else blank for l in labels]
+        lines.append(f"{seed:>4}  " + "  ".join(f"{c:>{width}}" for c in cells))
+    lines.append("-" * len(lines[0]))
+    totals = []
+    for label in labels:
+        rows = evaluations[label]
+        n = sum(r.tasks for r in rows)
+        mean = lambda f: sum(f(r) * r.tasks for r in rows) / n
+        totals.append(cols(SeedSummary(-1, n, mean(lambda r: r.solve_rate), mean(lambda r: r.mean_steps), 0.0, 0,
+                                       mean(lambda r: r.bridge_decisions), 0.0, "")))
+    lines.append(" all  " + "  ".join(f"{c:>{width}}" for c in totals))
+    return "\n".join(lines)

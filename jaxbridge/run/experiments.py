@@ -1,0 +1,122 @@
+"""Experiments: several approaches trained on the same env and seeds, one run directory each, then
+compared (the paper's figure and tables).
+
+The approaches run concurrently in worker threads: each one's cycles are one jitted XLA computation
+that releases the GIL, so on a 2-core CPU two approaches train in about the time of one (measured 2.2x
+for two 8-seed cycles in two threads vs one after the other). Each approach's numbers do not depend on
+what runs beside it. One progress bar counts the cycles of all of them. Each approach also shards its
+seeds over devices (jaxbridge/devices.py): the workers split `devices` between them, so that two
+approaches on 2 cores run one device each rather than four device streams on two cores (Light Switch
+Door's six approaches: 373.6 s vs 402.7 s, docs/PERFORMANCE.md). Neither changes any number.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import queue
+import threading
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+from pathlib import Path
+
+from tqdm import tqdm
+
+from jaxbridge.run import artifacts
+from jaxbridge.run import checkpoint
+from jaxbridge.run import comparison
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.run.runner import Interrupted, prepare_run_dir, train
+
+EXPERIMENT_FILE = "experiment.json"
+# Seconds per approach in `python -m bench.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
+# longest start first, so the workers finish close together.
+COST = {"maple_q": 200, "no_feature_selection": 172, "no_callplanner": 172, "ours": 111, "random": 20,
+        "pure_planning": 15}
+
+
+def is_experiment_dir(path: Path) -> bool:
+    return (path / EXPERIMENT_FILE).is_file()
+
+
+def load_experiment(experiment_dir: Path) -> tuple[TrainConfig, list[str]]:
+    """The base config and approach list of an experiment directory."""
+    try:
+        data = json.loads((experiment_dir / EXPERIMENT_FILE).read_text())
+        return TrainConfig.from_dict(data["config"]), list(data["approaches"])
+    except (OSError, KeyError, TypeError, json.JSONDecodeError) as err:
+        raise ValueError(f"{experiment_dir / EXPERIMENT_FILE} is not a valid experiment file: {err}") from None
+
+
+def default_workers(approaches: list[str]) -> int:
+    return max(1, min(len(approaches), os.cpu_count() or 1))
+
+
+def split_devices(devices: list | None, workers: int) -> list:
+    """One share of `devices` per worker: as even as possible, every device in one share; with fewer
+    devices than workers, every worker gets all of them (None stays None: the default device)."""
+    if not devices or len(devices) < workers:
+        return [devices] * workers
+    return [devices[i::workers] for i in range(workers)]
+
+
+def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
+                     resume: bool = False, workers: int | None = None, devices: list | None = None) -> dict[str, dict]:
+    """Train every approach (run directory `experiment_dir/<approach>`), `workers` at a time, then write
+    the comparison files (figure, results.md, results.csv), also after a fault or Ctrl-C for the
+    approaches that have files. With `resume`, finished approaches are kept, started ones continue
+    from their checkpoint and the others start. Returns each approach's summary, in list order."""
+    if not resume:
+        artifacts.write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
+            {"config": config.to_dict(), "approaches": approaches}, indent=2) + "\n")
+    workers = workers or default_workers(approaches)
+    bar = tqdm(total=config.cycles * len(approaches), unit="cycle", disable=not progress, dynamic_ncols=True,
+               desc=f"{config.env} x{config.num_seeds} seeds, {len(approaches)} approaches")
+    stop = threading.Event()
+    device_shares = queue.SimpleQueue()  # a worker takes a share of the devices per approach, then returns it
+    for share in split_devices(devices, min(workers, len(approaches))):
+        device_shares.put(share)
+
+    def run(name: str) -> dict:
+        if stop.is_set():  # interrupted before this approach's turn
+            raise Interrupted(0)
+        run_dir = experiment_dir / name
+        started = (run_dir / "checkpoints").is_dir() and bool(checkpoint.sealed_steps(run_dir / "checkpoints"))
+        if not started:
+            prepare_run_dir(run_dir, overwrite=True)
+        share = device_shares.get()
+        try:
+            return train(dataclasses.replace(config, approach=name), run_dir, resume=started, bar=bar, stop=stop,
+                         devices=share)
+        finally:
+            device_shares.put(share)
+
+    order = sorted(approaches, key=lambda a: -COST.get(a, 0))
+    try:
+        with ThreadPoolExecutor(workers, thread_name_prefix="approach") as pool:
+            futures = {name: pool.submit(run, name) for name in order}
+            try:
+                # Wake up now and then: the OS may deliver Ctrl-C's SIGINT to a worker thread, and Python
+                # only runs the handler (raising KeyboardInterrupt here) when the main thread runs.
+                pending = set(futures.values())
+                while pending:
+                    done, pending = wait(pending, timeout=0.2, return_when=FIRST_EXCEPTION)
+                    if any(f.exception() is not None for f in done):
+                        break
+            except KeyboardInterrupt:
+                pass
+            stop.set()  # after Ctrl-C or a fault: every running approach checkpoints and stops
+            wait(futures.values())
+        errors = [f.exception() for f in futures.values() if f.exception() is not None]
+        faults = [e for e in errors if not isinstance(e, Interrupted)]
+        if faults:
+            raise faults[0]
+        if errors:
+            cycles = ", ".join(f"{n} {futures[n].exception().cycle}" for n in approaches
+                               if isinstance(futures[n].exception(), Interrupted))
+            raise Interrupted(-1, f"interrupted; checkpoints saved ({cycles} cycles done)")
+        return {name: futures[name].result() for name in approaches}
+    finally:
+        bar.close()
+        done = [a for a in approaches if (experiment_dir / a / "metrics.csv").is_file()]
+        if done:
+            comparison.write_comparison(experiment_dir, config.env, done)

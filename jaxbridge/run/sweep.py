@@ -1,0 +1,139 @@
+"""The generalisation sweep (the paper's Q2, taken further): trained bridges on tasks with more and more
+novelty instances than they trained or were tested on (`eval.py RUN --sweep novelties`).
+
+Each env states its sweep (`NoveltySweep`: what is counted, the counts, how to draw a task with k of them
+and the task's horizon). The sweep's tasks are drawn once, from `sweep_seed`, and every seed of every
+approach meets the same ones, so two lines differ only by their policies. All counts go into one batch:
+one rollout (one compilation) per approach.
+"""
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass
+
+import numpy as np
+
+from envs_jax import env_class
+from envs_jax.base import NoveltyEnv
+from jaxbridge.run.evaluate import TrainedPolicy
+from jaxbridge.core.tasks import TaskBatch, make_batch
+
+
+@dataclass
+class SweepResult:
+    env: str
+    counted: str  # what the counts count, e.g. "doors"
+    setting: str  # e.g. "in a row of 60 cells"
+    counts: tuple[int, ...]
+    tasks_per_count: int
+    solve_rate: dict[str, np.ndarray]  # line label -> float[seeds, counts]; NaN where the approach cannot see the tasks
+    seeds: dict[str, list[int]]  # line label -> its seeds
+
+
+def sweep_tasks(env_cls: type[NoveltyEnv], tasks_per_count: int, sweep_seed: int = 0) -> tuple[list, np.ndarray]:
+    """(specs, int[len(specs)] the count of each): `tasks_per_count` tasks per count, each count's draw
+    seeded by (sweep_seed, count) so that it does not depend on the other counts."""
+    sweep = env_cls.novelty_sweep
+    specs, counts = [], []
+    for k in sweep.counts:
+        rng = np.random.default_rng([sweep_seed, k])
+        specs += [sweep.task(rng, k) for _ in range(tasks_per_count)]
+        counts += [k] * tasks_per_count
+    return specs, np.asarray(counts)
+
+
+def sweep_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int]) -> TaskBatch:
+    """Every seed meets every spec (seed-major), each with the sweep's horizon for it."""
+    horizon = env_cls.novelty_sweep.horizon
+    return make_batch(env_cls, specs * len(seeds), [s for s in seeds for _ in specs],
+                      horizons=[horizon(spec) for spec in specs] * len(seeds))
+
+
+def evaluate_sweep(policies: dict[str, TrainedPolicy], tasks_per_count: int = 10, sweep_seed: int = 0,
+                   rollout_seed: int = 0, progress=lambda label: None) -> SweepResult:
+    """Each policy (line label -> policy, all of one env) greedily on the sweep's tasks."""
+    envs = {p.config.env for p in policies.values()}
+    if len(envs) != 1:
+        raise ValueError(f"a sweep compares runs of one env, got {', '.join(sorted(envs))}")
+    env_cls = env_class(envs.pop())
+    specs, counts = sweep_tasks(env_cls, tasks_per_count, sweep_seed)
+    sweep = env_cls.novelty_sweep
+    batches: dict = {}  # (seeds, visible counts) -> batch: approaches of one experiment share it
+    rates, seeds_of = {}, {}
+    for label, policy in policies.items():
+        progress(label)
+        seeds = list(policy.config.seeds)
+        visible = tuple(k for k in sweep.counts if policy.can_see(env_cls.for_tasks(list_of(specs, counts == k))))
+        rate = np.full((len(seeds), len(sweep.counts)), np.nan)
+        if visible:
+            chosen = np.isin(counts, visible)
+            key = (tuple(seeds), visible)
+            if key not in batches:
+                batches[key] = sweep_batch(env_cls, list_of(specs, chosen), seeds)
+            success = policy.run(batches[key], rollout_seed).success.reshape(len(seeds), -1)
+            for j, k in enumerate(sweep.counts):
+                if k in visible:
+                    rate[:, j] = success[:, counts[chosen] == k].mean(axis=1)
+        rates[label], seeds_of[label] = rate, seeds
+    return SweepResult(env_cls.name, sweep.counted, sweep.setting, sweep.counts, tasks_per_count, rates, seeds_of)
+
+
+def list_of(specs: list, mask: np.ndarray) -> list:
+    return [s for s, m in zip(specs, mask) if m]
+
+
+def _cell(values: np.ndarray) -> str:
+    if np.isnan(values).all():
+        return "n/a"
+    mean, low, high = values.mean(), values.min(), values.max()
+    return f"{mean:.2f}" if low == high else f"{mean:.2f} [{low:.2f}, {high:.2f}]"
+
+
+def sweep_markdown(result: SweepResult) -> str:
+    """Solve rate per count (rows) and line (columns): mean [min, max] over seeds."""
+    labels = list(result.solve_rate)
+    lines = [f"| {result.counted} | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    for j, k in enumerate(result.counts):
+        lines.append(f"| {k} | " + " | ".join(_cell(result.solve_rate[label][:, j]) for label in labels) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def sweep_csv(result: SweepResult) -> str:
+    """One row per line, seed and count; empty solve_rate where the approach cannot see the tasks."""
+    out = io.StringIO()
+    writer = csv.writer(out)
+    writer.writerow(["line", "seed", result.counted.replace(" ", "_"), "tasks", "solve_rate"])
+    for label, rate in result.solve_rate.items():
+        for i, seed in enumerate(result.seeds[label]):
+            for j, k in enumerate(result.counts):
+                value = "" if np.isnan(rate[i, j]) else f"{rate[i, j]:.4f}"
+                writer.writerow([label, seed, k, result.tasks_per_count, value])
+    return out.getvalue()
+
+
+def plot_sweep(result: SweepResult, title: str) -> bytes:
+    """PNG: solve rate vs count, one line per label (mean over seeds) with a band from the lowest to the
+    highest seed."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10, 4.2))
+    ax = fig.add_subplot()
+    x = np.asarray(result.counts)
+    for label, rate in result.solve_rate.items():
+        if np.isnan(rate).all():  # listed, so that a missing line is explained
+            ax.plot([], [], " ", label=f"{label}: n/a (its full-state input is too small)")
+            continue
+        line, = ax.plot(x, rate.mean(0), marker="o", markersize=3, label=f"{label} ({rate.shape[0]} seeds)")
+        ax.fill_between(x, rate.min(0), rate.max(0), color=line.get_color(), alpha=0.2)
+    ax.set_xlabel(f"number of {result.counted} ({result.setting})")
+    ax.set_ylabel(f"test solve rate ({result.tasks_per_count} tasks per point and seed)")
+    ax.set_xticks(x)
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)  # clear of the lines
+    ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    return buffer.getvalue()
