@@ -3,9 +3,10 @@
     python train.py --env light_switch_door --num-seeds 8         # all six approaches: the paper's figure
     python train.py --env light_switch_door --approaches ours     # just our method
     python train.py --resume runs/light_switch_door               # continue after a crash or Ctrl-C
+    python train.py --env examples.locked_box:LockedBox --num-seeds 2 --cycles 3   # an env of your own
 
 Approaches: ours (bridge policy learning), no_feature_selection, no_callplanner, random (random bridge),
-pure_planning, maple_q (pure RL); see jaxbridge/approaches.py.
+pure_planning, maple_q (pure RL); see jaxbridge/learn/approaches.py.
 
 The experiment directory (default runs/<env>) gets curves.png (test and training smooth reward of every
 approach, mean and min-max band over seeds), results.md and results.csv (test solve rate at cycles
@@ -23,21 +24,18 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
-from envs_jax import ENVS
+from envs_jax import registered
+from jaxbridge.commands import train as command
+from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.approaches import APPROACHES
+from jaxbridge.learn.devices import device_count_arg, select_devices
 from jaxbridge.utils import compile_cache
 from jaxbridge.utils.cli import UsageError, non_negative_int, positive_int, run_main
-from jaxbridge.core.config import TrainConfig
-from jaxbridge.learn.devices import device_count_arg, select_devices
 
 DEFAULTS = TrainConfig()
-# Flags that set the run's config; --resume takes the saved config instead.
-CONFIG_FLAGS = {"env": "env", "num_seeds": "num_seeds", "first_seed": "first_seed", "cycles": "cycles",
-                "episodes_per_cycle": "episodes_per_cycle", "train_steps": "train_steps",
-                "updates_per_cycle": "updates_per_cycle", "batch_size": "batch_size", "call_planner_bonus": "call_planner_bonus",
-                "checkpoint_every": "checkpoint_every", "seed_block": "seed_block"}
 
 
 def approach_list(text: str) -> list[str]:
@@ -57,7 +55,8 @@ def approach_list(text: str) -> list[str]:
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     d = DEFAULTS
-    p.add_argument("--env", choices=sorted(ENVS), help=f"environment (default: {d.env})")
+    p.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(registered())}, or package.module:Class "
+                                              f"for an env of your own (checked first; docs/NEW_ENV.md) (default: {d.env})")
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: all, the paper's six: "
                         f"{', '.join(APPROACHES)}; doorknobs: all but no_feature_selection and maple_q)")
@@ -104,31 +103,6 @@ def parse_args(argv):
     return p.parse_args(argv)
 
 
-def make_config(args) -> TrainConfig:
-    given = {field: getattr(args, flag) for flag, field in CONFIG_FLAGS.items() if getattr(args, flag) is not None}
-    config = TrainConfig.for_env(given.pop("env", DEFAULTS.env), **given)
-    if config.episodes_per_cycle * config.train_steps > config.buffer_capacity:
-        raise UsageError(f"--episodes-per-cycle x {config.train_steps} steps must fit the replay buffer "
-                         f"({config.buffer_capacity} transitions)")
-    if config.seed_block > config.num_seeds:
-        raise UsageError(f"--seed-block {config.seed_block} is larger than the {config.num_seeds} seeds")
-    env_cls = ENVS[config.env]
-    needed = {seed: env_cls.train_task(seed).min_steps for seed in config.seeds}
-    worst = max(needed, key=needed.get)
-    if config.train_steps < needed[worst]:
-        raise UsageError(f"--train-steps {config.train_steps} is too small to ever reach the goal: seed {worst}'s "
-                         f"training task needs at least {needed[worst]} steps")
-    return config
-
-
-def report(name: str, info: dict) -> str:
-    at = info["test_solve_rate_at"]
-    last = max((int(c) for c in at), default=None)
-    return (f"{name:>20}: mean test solve rate at the last cycle {info['mean_test_solve_rate_per_cycle'][-1]:.2f}; "
-            f"smooth reward at cycle {info['cycles']}: {info['smooth_reward_final']['mean']:.3f}"
-            + (f"; at cycle {last}: {at[str(last)]['mean']:.2f}" if last else "") + f" ({info['elapsed_s']:.0f} s)")
-
-
 def main(argv=None) -> int:
     args = parse_args(argv)
     try:
@@ -136,46 +110,21 @@ def main(argv=None) -> int:
     except ValueError as err:
         raise UsageError(str(err)) from None
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles
-    import time
     from jaxbridge.run.checkpoint import CheckpointError
-    from jaxbridge.run.experiments import is_experiment_dir, load_experiment, train_approaches
-    from jaxbridge.run.runner import Interrupted, NumericalFault, load_config, prepare_run_dir, train
+    from jaxbridge.run.experiments import is_experiment_dir
+    from jaxbridge.run.runner import Interrupted, NumericalFault
 
-    start = time.perf_counter()
-    progress = not args.no_progress
+    start, progress = time.perf_counter(), not args.no_progress
     if args.resume is not None:
-        clashing = [f"--{flag.replace('_', '-')}" for flag in CONFIG_FLAGS if getattr(args, flag) is not None]
+        clashing = [f"--{flag.replace('_', '-')}" for flag in command.CONFIG_FLAGS if getattr(args, flag) is not None]
         clashing += [f for f, on in (("--overwrite", args.overwrite), ("--name", args.name),
                                      ("--approaches", args.approaches is not None)) if on]
         if clashing:
             raise UsageError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")
-        out_dir = args.resume
-        try:
-            if is_experiment_dir(out_dir):
-                config, approaches = load_experiment(out_dir)
-                run = lambda: train_approaches(config, approaches, out_dir, progress, resume=True,
-                                               workers=args.workers, devices=devices)
-            else:  # one approach's run directory
-                config = load_config(out_dir)
-                run = lambda: {config.approach: train(config, out_dir, progress, resume=True, devices=devices)}
-        except ValueError as err:
-            raise UsageError(str(err)) from None
+        out_dir, run = args.resume, command.resumed(args.resume, progress, args.workers, devices)
     else:
-        config = make_config(args)
-        approaches = args.approaches or list(ENVS[config.env].default_approaches or APPROACHES)
-        skipped = [a for a in APPROACHES if a not in approaches]
-        if args.approaches is None and skipped:
-            print(f"{config.env}: not running {', '.join(skipped)} by default ({ENVS[config.env].why_not_all}); "
-                  f"--approaches all runs them", file=sys.stderr)
-        out_dir = args.out / (args.name or config.env)
-        try:
-            prepare_run_dir(out_dir, args.overwrite)
-        except FileExistsError as err:
-            raise UsageError(str(err)) from None
-        except OSError as err:
-            raise UsageError(f"cannot write experiment directory {out_dir}: {err.strerror}") from None
-        run = lambda: train_approaches(config, approaches, out_dir, progress, workers=args.workers,
-                                       devices=devices)
+        out_dir, run = command.new_experiment(vars(args), args.approaches, args.out, args.name, args.overwrite,
+                                              progress, args.workers, devices)
     try:
         summaries = run()
     except CheckpointError as err:
@@ -189,7 +138,7 @@ def main(argv=None) -> int:
     print(f"done in {time.perf_counter() - start:.0f} s -> {out_dir}/"
           + ("  (figure: curves.png, tables: results.md)" if is_experiment_dir(out_dir) else ""))
     for name, info in summaries.items():
-        print(report(name, info))
+        print(command.report(name, info))
     return 0
 
 

@@ -53,14 +53,14 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
     from bench.meta_policy import cases, measure
     from bench.training import measure_cycles
     from bench.updates import measure_updates
-    from envs_jax import ENVS as ENV_CLASSES
+    from envs_jax import env_class
     from jaxbridge.core.config import TrainConfig
 
     base = rss_mib()
     out = {"env": env, "devices": describe(devices), "rss_base_mib": round(base, 1)}
     start = time.perf_counter()
     meta = {}
-    for name, batch in cases(ENV_CLASSES[env], full=False).items():
+    for name, batch in cases(env_class(env), full=False).items():
         r = measure(batch, repeats)
         meta[name] = {k: round(v, 4) if isinstance(v, float) else v for k, v in r.items()}
     out["meta_policy"] = {"device": describe(jax.local_devices()[:1]), "cases": meta,

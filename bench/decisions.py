@@ -25,11 +25,11 @@ def main() -> None:
     experiment, learners, rates = train_seeds(config)
     print_digits(config.seeds, rates)
 
-    test, env, net = experiment.test, experiment.env, experiment.net
+    test, env, net = experiment.test, experiment.test_env, experiment.dqn.net
     owner = np.repeat(np.arange(config.num_seeds), config.num_test_tasks)
     greedy = episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
     keys = jax.random.split(jax.random.key(123), len(owner))
-    result, records = rollout(env, experiment.test_bridge, greedy, test.tasks, test.tables, test.horizons, keys,
+    result, records = rollout(env, experiment.bridge(env), greedy, test.arrays, keys,
                               test.max_steps, record=True, controls=experiment.approach.controls)
     names = env.skill_names + ("CallPlanner",)
     success = np.asarray(result.success)

@@ -28,15 +28,16 @@ def main() -> None:
     from jaxbridge.learn.devices import SeedMesh, select_devices
     devices = select_devices(args.devices)  # before JAX starts: virtual CPU devices
     from jaxbridge.core.config import TrainConfig
-    from jaxbridge.learn.online import build_experiment, init_learners, make_cycle
+    from jaxbridge.learn.online import Cycle
+    from jaxbridge.learn.setup import make_setup
 
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, seed_block=args.seed_block)
-    experiment = build_experiment(config)
+    experiment = make_setup(config)
     layouts = {}
     for n in (1, args.devices):
         seeds = SeedMesh(config.num_seeds, tuple(devices[:n]), config.seed_block)
-        layouts[n] = {"seeds": seeds, "cycle": make_cycle(experiment, seeds),
-                      "learners": seeds.place(init_learners(experiment)), "times": [], "metrics": []}
+        layouts[n] = {"seeds": seeds, "cycle": Cycle(experiment, seeds),
+                      "learners": seeds.place(experiment.init_learners()), "times": [], "metrics": []}
     for _ in range(args.cycles):
         for layout in layouts.values():
             t0 = time.perf_counter()

@@ -74,7 +74,7 @@ def measure(repeats: int) -> dict:
 
     oracle = make_bridge("oracle", env)
     keys = jax.random.split(jax.random.key(0), size)
-    run_oracle = lambda: rollout(env, oracle, None, tasks, batch.tables, batch.horizons, keys, STEPS)[0]
+    run_oracle = lambda: rollout(env, oracle, None, batch.arrays, keys, STEPS)[0]
     result = run_oracle()
     times = [best_ms_per_step(fn, repeats) for fn in (run_oracle, scanned(action), scanned(initiable))]
     return {"ms": dict(zip(FIGURES, times)), "solved": int(result.success.sum()), "episodes": size,

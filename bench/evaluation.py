@@ -19,22 +19,22 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from envs_jax import ENVS
-from envs_jax import env_class
+from envs_jax import registered
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.run.evaluate import TrainedPolicy, load_policy
-from jaxbridge.learn.online import seed_learners, training_env
+from jaxbridge.learn.setup import make_setup
 from jaxbridge.core.tasks import evaluation_batch
 
 
 def fresh_policy(env: str, num_seeds: int) -> TrainedPolicy:
     config = TrainConfig.for_env(env, num_seeds=num_seeds)
-    return TrainedPolicy(config, 0, seed_learners(training_env(config), config))
+    setup = make_setup(config)
+    return TrainedPolicy(setup, 0, setup.init_learners())
 
 
 def measure(policy: TrainedPolicy, tasks: int) -> dict:
     start = time.perf_counter()
-    batch = evaluation_batch(env_class(policy.config.env), policy.config.seeds, tasks)
+    batch = evaluation_batch(policy.setup.env_cls, policy.config.seeds, tasks)
     build = time.perf_counter() - start
 
     def timed_run():
@@ -51,7 +51,7 @@ def measure(policy: TrainedPolicy, tasks: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--envs", default=",".join(ENVS), help="comma-separated envs (default: %(default)s)")
+    parser.add_argument("--envs", default=",".join(registered()), help="comma-separated envs (default: %(default)s)")
     parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
     parser.add_argument("--tasks", type=int, default=100, help="test tasks per seed (default: %(default)s)")
     parser.add_argument("--run", type=Path, default=None, help="time this run's checkpoint instead")

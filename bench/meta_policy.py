@@ -13,7 +13,7 @@ import time
 
 import jax
 
-from envs_jax import ENVS
+from envs_jax import env_class, registered
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import evaluation_batch
@@ -23,7 +23,7 @@ def measure(batch, repeats: int) -> dict:
     bridge = make_bridge("oracle", batch.env)
 
     def once(i):
-        result, _ = rollout(batch.env, bridge, None, batch.tasks, batch.tables, batch.horizons,
+        result, _ = rollout(batch.env, bridge, None, batch.arrays,
                             jax.random.split(jax.random.key(i), batch.size), batch.max_steps)
         return jax.block_until_ready(result)
 
@@ -53,13 +53,13 @@ def cases(env_cls, full: bool = True) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=30, help="timed rollouts per case (default: %(default)s)")
-    parser.add_argument("--env", default="light_switch_door", choices=sorted(ENVS),
+    parser.add_argument("--env", default="light_switch_door", choices=registered(),
                         help="environment (default: %(default)s)")
     args = parser.parse_args()
     print(f"jax {jax.__version__}, devices: {jax.devices()}")
     print(f"{'case':<28} {'episodes':>8} {'env steps':>9} {'solved':>6} {'compile s':>9} {'ms/rollout':>10} "
           f"{'env steps/s':>12}")
-    for name, batch in cases(ENVS[args.env]).items():
+    for name, batch in cases(env_class(args.env)).items():
         r = measure(batch, args.repeats)
         print(f"{name:<28} {r['episodes']:>8} {r['steps']:>9} {r['solved']:>6.2f} {r['compile_s']:>9.2f} "
               f"{r['median_ms']:>10.2f} {r['steps_per_s']:>12,.0f}")

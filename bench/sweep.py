@@ -15,7 +15,7 @@ import numpy as np
 from bench.training import measure_cycles
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import select_devices
-from jaxbridge.learn.online import Experiment
+from jaxbridge.learn.setup import Setup
 
 
 def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cycles: int) -> argparse.ArgumentParser:
@@ -40,9 +40,9 @@ def swept_config(args) -> tuple[TrainConfig, dict]:
     return dataclasses.replace(config, **changes), changes
 
 
-def train_seeds(config: TrainConfig) -> tuple[Experiment, object, np.ndarray]:
+def train_seeds(config: TrainConfig) -> tuple[Setup, object, np.ndarray]:
     """Train every seed of `config` over every device (as train.py; results do not depend on it), without
-    run files. Returns the experiment, the final learners (one device) and the test solve rates
+    run files. Returns the setup, the final learners (one device) and the test solve rates
     float[seeds, cycles]."""
     run = measure_cycles(config, select_devices("auto"))
     return run["experiment"], run["seeds"].unpad(run["learners"]), run["seed_rates"]

@@ -17,7 +17,8 @@ import numpy as np
 
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh, describe, device_count_arg, select_devices
-from jaxbridge.learn.online import build_experiment, init_learners, make_cycle
+from jaxbridge.learn.online import Cycle
+from jaxbridge.learn.setup import make_setup
 
 # One seed, one approach, 100 cycles (results.md); Coffee: learning time only, the run never finished.
 AUTHORS_WHOLE_RUN_S = {"light_switch_door": 17_572, "doorknobs": 21_118, "coffee": 13_900}
@@ -32,10 +33,10 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
     from jaxbridge.utils import compile_cache
 
     start = time.perf_counter()
-    experiment = build_experiment(config)
+    experiment = make_setup(config)
     seeds = SeedMesh(config.num_seeds, tuple(devices), config.seed_block)
-    learners = seeds.place(init_learners(experiment))
-    cycle = make_cycle(experiment, seeds)
+    learners = seeds.place(experiment.init_learners())
+    cycle = Cycle(experiment, seeds)
     built = time.perf_counter()
     times, seed_rates = [], []
 

@@ -20,7 +20,7 @@ import optax
 
 from jaxbridge.learn import dqn
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.learn.online import seed_learners, training_env
+from jaxbridge.learn.setup import make_setup
 from jaxbridge.learn.q_bridge import encode
 
 
@@ -34,10 +34,11 @@ def _seconds(fn, arg) -> float:
 
 def measure(env_name: str, approach: str, fill: int, updates: int) -> dict:
     config = TrainConfig.for_env(env_name, approach=approach, num_seeds=1, updates_per_cycle=updates)
-    env = training_env(config)
-    learner = jax.tree.map(lambda x: x[0], seed_learners(env, config))
+    setup = make_setup(config)
+    env, learning = setup.train_env, setup.dqn
+    learner = jax.tree.map(lambda x: x[0], setup.init_learners())
     learner = learner.replace(buffer=learner.buffer.replace(size=jnp.int32(fill)))  # zeros: timing only
-    net, optimizer = dqn.q_network(config), dqn.make_optimizer(config)
+    net, optimizer = learning.net, learning.optimizer
     _, indices = dqn.minibatch_indices(config, learner)
     batch = jax.tree.map(lambda d: d[indices[0]], learner.buffer.data)
     inputs = encode(env, batch.features, batch.skill, batch.param)
@@ -63,8 +64,8 @@ def measure(env_name: str, approach: str, fill: int, updates: int) -> dict:
     per_update = lambda s: 1e6 * s / updates
     return {
         "input": inputs.shape[-1],
-        "learn_us": per_update(_seconds(lambda l: dqn.learn(env, config, l, jnp.int32(0)), learner)),
-        "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(env, config, l, l.key), learner),
+        "learn_us": per_update(_seconds(lambda l: dqn.learn(learning, l, jnp.int32(0)), learner)),
+        "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(learning, l, l.key), learner),
         "draws_us": per_update(_seconds(lambda l: dqn.minibatch_indices(config, l), learner)),
         "gather_encode_us": per_update(_seconds(gather_encode, jnp.float32(0))),
         "forward_backward_us": per_update(_seconds(repeat(forward_backward), learner.params)),

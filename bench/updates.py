@@ -25,13 +25,13 @@ def measure_updates(experiment, seeds, learners, updates: int, repeats: int = 3)
     from dataclasses import replace
     from jaxbridge.learn.dqn import minibatch_indices, update_step
 
-    env, config = experiment.train.env, experiment.config
-    config = replace(config, updates_per_cycle=updates)
+    config = replace(experiment.config, updates_per_cycle=updates)
+    learning = replace(experiment.dqn, config=config)
 
     def per_seed(learner, targets):
         key, indices = minibatch_indices(config, learner)
         learner, (losses, _) = jax.lax.scan(
-            lambda learner, index: update_step(env, config, learner, targets, index), learner, indices)
+            lambda learner, index: update_step(learning, learner, targets, index), learner, indices)
         return learner.replace(key=key), losses.mean()
 
     run = jax.jit(seeds.map_seeds(per_seed), out_shardings=seeds.sharding)

@@ -1,16 +1,20 @@
-"""Pure-functional JAX environments with novelties, and their planner models."""
-from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, SkillCall, SkillSpec
-from envs_jax.coffee.env import Coffee
-from envs_jax.doorknobs.env import Doorknobs
-from envs_jax.light_switch_door.env import LightSwitchDoor
+"""Pure-functional JAX environments with novelties, and their planner models.
 
-ENVS = {LightSwitchDoor.name: LightSwitchDoor, Doorknobs.name: Doorknobs, Coffee.name: Coffee}
+The public API an env is written against: `NoveltyEnv` (the contract, envs_jax/base.py) and its value
+types, `register` and `env_class` (names, envs_jax/registry.py), `envs_jax.drawing` for pictures.
+`jaxbridge.check_env` checks an env against the contract; docs/NEW_ENV.md walks through writing one.
+"""
+from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, BridgeAction, BridgeObs, NoveltyEnv,
+                           NoveltySweep, SkillCall, SkillSpec, TaskSpec)
+from envs_jax.coffee import Coffee
+from envs_jax.doorknobs import Doorknobs
+from envs_jax.light_switch_door import LightSwitchDoor
+from envs_jax.registry import BUILTIN, env_class, is_builtin, register, registered
 
+for _cls in (LightSwitchDoor, Doorknobs, Coffee):
+    register(_cls.name, _cls)
+assert registered() == sorted(BUILTIN)
 
-def env_class(name: str) -> type[NoveltyEnv]:
-    """The env class registered under `name`; ValueError naming the choices otherwise."""
-    if name not in ENVS:
-        raise ValueError(f"unknown env {name!r}; choose from {', '.join(sorted(ENVS))}")
-    return ENVS[name]
-
-__all__ = ['BridgeAction', 'BridgeObs', 'NoveltyEnv', 'SkillCall', 'SkillSpec', 'LightSwitchDoor', 'Doorknobs', 'Coffee', 'ENVS', 'env_class']
+__all__ = ["ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
+           "NoveltySweep", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee",
+           "env_class", "is_builtin", "register", "registered"]

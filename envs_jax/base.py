@@ -1,18 +1,9 @@
-"""The environment interface shared by Light Switch Door, Doorknobs and Coffee.
+"""The env contract: what the meta-policy, the learner, the planner and the renderer use of an env.
 
-An environment is a frozen (hashable) object holding only static configuration, chiefly the padded
-capacity (max cells, rooms, cups...) that fixes every array shape, so it can be a static argument of
-`jax.jit`. Everything that changes is in pytrees:
-
-* host: `train_task(seed)`, `test_tasks(seed, n)` draw task specs with numpy from the seed;
-  `task_arrays(spec)` pads one spec into the env's `Task` struct; `planner_problem(spec)` states the
-  planner's STRIPS problem (which omits the novelty).
-* device, pure and vmappable: `reset(task) -> State`, `step(state, action) -> State`,
-  `abstract(state) -> bool[num_atoms]` (fluent atoms in a fixed layout), `goal_reached(state)`,
-  `state_vector(state)` (the low-level state, for "did anything change"), `features(state, stuck_state)`
-  (the bridge's object-centric observation), `full_state(state)` (every object's raw features padded
-  to `full_state_size`, the "no feature selection" observation), and the skills: `skill_action(state, call)`,
-  `skill_done(prev_state, state, call)`, `skill_initiable(state)`.
+An env is a frozen dataclass holding only its capacity (max cells, rooms, cups...), which fixes every
+array shape, so it is hashable and a static argument of `jax.jit`; everything that changes is in pytrees.
+Subclass `NoveltyEnv`, implement its abstract methods and set its class attributes; `jaxbridge.check_env`
+checks an env against this contract (docs/NEW_ENV.md walks through one).
 
 Skills are parameterised options. A ground skill is (skill id, slot, param): the slot picks the object
 the skill acts on (MoveRobot's target cell, MoveToDoor's door), the param is its continuous argument,
@@ -20,8 +11,9 @@ drawn from the skill's sampler: uniform in [param_low, param_high] (equal bounds
 """
 from __future__ import annotations
 
+import abc
 from dataclasses import dataclass
-from typing import Any, Callable, ClassVar
+from typing import Any, Callable, ClassVar, Hashable, Protocol
 
 import jax
 import jax.numpy as jnp
@@ -94,23 +86,157 @@ def stack_trees(trees: list[Any]) -> Any:
     return jax.tree.map(lambda *xs: jnp.asarray(np.stack(xs)), *trees)
 
 
-class NoveltyEnv:
-    """Base class: shared skill bookkeeping. Subclasses are frozen dataclasses (see module doc)."""
+class TaskSpec(Protocol, Hashable):
+    """A host-side task description (a frozen dataclass): hashable, so equal specs share a compilation."""
+
+    @property
+    def horizon(self) -> int:
+        """Env steps a test episode of this task may take."""
+
+    @property
+    def min_steps(self) -> int:
+        """No action sequence reaches the goal in fewer env steps (train.py refuses shorter horizons)."""
+
+    def describe(self) -> str:
+        """The task's size in words, e.g. "11 cells, 3 doors"."""
+
+
+class NoveltyEnv(abc.ABC):
+    """Base class of every env. Shapes below: B batch, D = len(state_vector), F = num_features,
+    S = full_state_size, A = action_dim, K = num_skills; one unbatched state unless said otherwise.
+
+    Class attributes an env sets:
+      name: str                          the short name (`--env`, run files)
+      skills: tuple[SkillSpec, ...]      the skills, in skill-id order; id K is CallPlanner
+      action_dim: int                    A, the low-level action's length
+      num_features: int                  F, the bridge's object-centric observation
+      full_state_size: int               S, the "no feature selection" observation (padded)
+      domain: planner.Domain             the planner's lifted model, which omits the novelty
+    """
 
     name: ClassVar[str]
     skills: ClassVar[tuple[SkillSpec, ...]]
     action_dim: ClassVar[int]
     num_features: ClassVar[int]
     full_state_size: ClassVar[int]
-    # Training hyperparameters where this env departs from the paper-wide defaults (TrainConfig.for_env).
+    domain: ClassVar[Any]
+    # Training hyperparameters where this env departs from TrainConfig's defaults (TrainConfig.for_env).
     train_defaults: ClassVar[dict] = {}
-    # How eval.py's generalisation sweep grows this env's tasks.
-    novelty_sweep: ClassVar[NoveltySweep]
-    # The approaches train.py runs when none are named (None: all six) and why not all.
+    # How `eval.py RUN --sweep novelties` grows this env's tasks (None: no sweep).
+    novelty_sweep: ClassVar[NoveltySweep | None] = None
+    # The approaches train.py runs when none are named (None: all six), and why not all.
     default_approaches: ClassVar[tuple[str, ...] | None] = None
     why_not_all: ClassVar[str] = ""
+    # The sizes `sized_task` takes (name -> what it counts), e.g. {"cells": ..., "doors": ...}.
+    task_sizes: ClassVar[dict[str, str]] = {}
 
-    # ---- skills ---------------------------------------------------------------------------------
+    # ---- host: tasks and the planner's model -------------------------------------------------------
+    @staticmethod
+    @abc.abstractmethod
+    def train_task(seed: int) -> TaskSpec:
+        """The seed's training task (numpy RNG seeded by `seed`)."""
+
+    @staticmethod
+    @abc.abstractmethod
+    def test_tasks(seed: int, num_tasks: int = 10) -> list[TaskSpec]:
+        """The seed's test tasks."""
+
+    @classmethod
+    @abc.abstractmethod
+    def for_tasks(cls, specs: list[TaskSpec]) -> "NoveltyEnv":
+        """The env at the smallest capacity that holds every spec."""
+
+    @classmethod
+    def sized_task(cls, rng: np.random.Generator, **sizes: int) -> TaskSpec:
+        """A task of the sizes named in `task_sizes` (`eval.py RUN --task-size name=N,...`); ValueError
+        for sizes it cannot build."""
+        raise ValueError(f"env {cls.name!r} builds no tasks of a chosen size")
+
+    @abc.abstractmethod
+    def task_arrays(self, spec: TaskSpec) -> Any:
+        """The spec padded to this env's capacity: the env's Task struct of numpy arrays."""
+
+    @abc.abstractmethod
+    def planner_problem(self, spec: TaskSpec) -> Any:
+        """The planner's STRIPS problem (planner.Problem over `domain`) for the spec."""
+
+    @property
+    @abc.abstractmethod
+    def num_atoms(self) -> int:
+        """N: fluent ground atoms of the abstract state, in a fixed layout (`abstract`, `atom_index`)."""
+
+    @abc.abstractmethod
+    def atom_index(self, atom: tuple[str, ...]) -> int:
+        """The position in [0, N) of a fluent ground atom, e.g. ("RobotInCell", "robby", "cell3")."""
+
+    @abc.abstractmethod
+    def object_slot(self, name: str) -> int:
+        """The slot (int) of a named object a skill may act on, e.g. "cell3" -> 3."""
+
+    # ---- device: dynamics, pure and vmappable ------------------------------------------------------
+    @abc.abstractmethod
+    def reset(self, task: Any) -> Any:
+        """The initial State (a flax struct holding its task) of one padded Task."""
+
+    @abc.abstractmethod
+    def step(self, state: Any, action: jax.Array) -> Any:
+        """The State after the float32[A] action."""
+
+    @abc.abstractmethod
+    def abstract(self, state: Any) -> jax.Array:
+        """bool[N]: which fluent atoms hold (the planner's view of the state)."""
+
+    @abc.abstractmethod
+    def goal_reached(self, state: Any) -> jax.Array:
+        """bool[]: the task's goal holds."""
+
+    @abc.abstractmethod
+    def state_vector(self, state: Any) -> jax.Array:
+        """float32[D]: the low-level state, for "did anything change" (stuck detection, CanPlan)."""
+
+    # ---- device: what the bridge sees --------------------------------------------------------------
+    @abc.abstractmethod
+    def features(self, state: Any, stuck_state: Any) -> jax.Array:
+        """float32[F]: the bridge's object-centric observation (`stuck_state`: where the bridge took over)."""
+
+    @abc.abstractmethod
+    def full_state(self, state: Any) -> jax.Array:
+        """float32[S]: every object's raw features, padded (the "no feature selection" observation)."""
+
+    @property
+    def full_state_fits(self) -> bool:
+        """Whether `full_state` can hold every object of this env's capacity (S is fixed by the largest
+        test task, so larger sweep tasks are beyond the full-state ablations' input)."""
+        return True
+
+    # ---- device: skills ----------------------------------------------------------------------------
+    @abc.abstractmethod
+    def skill_action(self, state: Any, call: SkillCall) -> jax.Array:
+        """float32[A]: the running ground skill's next action."""
+
+    @abc.abstractmethod
+    def skill_done(self, prev_state: Any, state: Any, call: SkillCall) -> jax.Array:
+        """bool[]: the skill has terminated after the step prev_state -> state."""
+
+    def skill_initiable(self, state, skill: jax.Array, slot: jax.Array) -> jax.Array:
+        """bool[...]: ground skills (broadcast shapes) that can start in `state`. Preconditions are
+        checked by the planner model; envs whose skills need more (a motion plan) override this."""
+        return jnp.ones(jnp.broadcast_shapes(skill.shape, slot.shape), bool)
+
+    # ---- optional hooks ----------------------------------------------------------------------------
+    def oracle_bridge(self, params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
+        """A hand-written bridge that fixes the novelty (tests, `eval.py --bridge oracle`); optional."""
+        raise NotImplementedError(f"env {self.name!r} has no oracle bridge")
+
+    @property
+    def has_oracle(self) -> bool:
+        return type(self).oracle_bridge is not NoveltyEnv.oracle_bridge
+
+    def drawer(self):
+        """The env's episode drawer (an envs_jax.drawing.Drawer), or None if it draws nothing."""
+        return None
+
+    # ---- derived: skill bookkeeping ----------------------------------------------------------------
     @property
     def num_skills(self) -> int:
         return len(self.skills)
@@ -129,21 +255,10 @@ class NoveltyEnv:
         return low[skill] + (high[skill] - low[skill]) * u
 
     def sample_params(self, key: jax.Array, shape: tuple[int, ...] = ()) -> jax.Array:
-        """float32[*shape, num_skills]: one draw from every skill's parameter sampler."""
+        """float32[*shape, K]: one draw from every skill's parameter sampler."""
         u = jax.random.uniform(key, shape + (self.num_skills,))
         return self.param_from_uniform(jnp.arange(self.num_skills), u)
 
-    def skill_initiable(self, state, skill: jax.Array, slot: jax.Array) -> jax.Array:
-        """bool[...]: ground skills (broadcast shapes) that can start in `state`. Preconditions are
-        checked by the planner model; envs whose skills need more (a motion plan) override this."""
-        return jnp.ones(jnp.broadcast_shapes(skill.shape, slot.shape), bool)
-
-    @property
-    def full_state_fits(self) -> bool:
-        """Whether `full_state` can hold every object of this env's capacity: its size is fixed by the
-        largest test task, so larger (sweep) tasks are beyond the full-state ablations' input."""
-        return True
-
-    # ---- tasks ------------------------------------------------------------------------------------
     def stack_tasks(self, specs: list) -> Any:
+        """The specs' Task structs stacked on a leading axis (device arrays)."""
         return stack_trees([self.task_arrays(s) for s in specs])

@@ -10,10 +10,11 @@ import pytest
 
 from envs_jax.light_switch_door.env import LightSwitchDoor
 from jaxbridge.learn.approaches import APPROACHES, get_approach
-from jaxbridge.core.bridges import random_bridge
+from jaxbridge.core.bridges import RandomBridge
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, rollout
-from jaxbridge.learn.online import build_experiment, init_learners, make_cycle
+from jaxbridge.learn.online import Cycle
+from jaxbridge.learn.setup import make_setup
 from jaxbridge.core.tasks import evaluation_batch
 
 TINY = TrainConfig(num_seeds=1, episodes_per_cycle=2, num_test_tasks=2, updates_per_cycle=2, buffer_capacity=512)
@@ -27,7 +28,7 @@ def tests_batch():
 def random_rollout(batch, controls, seed=0):
     """The random bridge picks CallPlanner whenever it is applicable, so it shows what `controls` allow."""
     keys = jax.random.split(jax.random.key(seed), batch.size)
-    result, records = rollout(batch.env, random_bridge(batch.env), None, batch.tasks, batch.tables, batch.horizons,
+    result, records = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
                               keys, batch.max_steps, record=True, controls=controls)
     return jax.tree.map(np.asarray, result), jax.tree.map(np.asarray, records)
 
@@ -51,8 +52,8 @@ def primitives(closed_jaxpr) -> Counter:
 
 
 def cycle_program(approach: str) -> Counter:
-    experiment = build_experiment(replace(TINY, approach=approach))
-    return primitives(jax.make_jaxpr(make_cycle(experiment))(init_learners(experiment)))
+    experiment = make_setup(replace(TINY, approach=approach))
+    return primitives(jax.make_jaxpr(Cycle(experiment))(experiment.init_learners()))
 
 
 def test_every_approach_is_registered_with_its_parts():
@@ -99,10 +100,10 @@ def test_non_learning_approaches_never_evaluate_a_q_network(approach):
 
 
 def test_pure_planning_replans_whenever_stuck_and_solves_nothing(tests_batch):
-    from jaxbridge.core.bridges import pure_planning_bridge
+    from jaxbridge.core.bridges import PurePlanningBridge
     keys = jax.random.split(jax.random.key(0), tests_batch.size)
-    result, records = rollout(tests_batch.env, pure_planning_bridge(tests_batch.env), None, tests_batch.tasks,
-                              tests_batch.tables, tests_batch.horizons, keys, tests_batch.max_steps, record=True)
+    result, records = rollout(tests_batch.env, PurePlanningBridge(tests_batch.env), None, tests_batch.arrays,
+                              keys, tests_batch.max_steps, record=True)
     result, records = jax.tree.map(np.asarray, (result, records))
     assert not result.success.any()
     decided = records.decided & records.live
@@ -112,11 +113,11 @@ def test_pure_planning_replans_whenever_stuck_and_solves_nothing(tests_batch):
 
 def test_no_feature_selection_sees_the_padded_full_state(tests_batch):
     approach = get_approach("no_feature_selection")
-    experiment = build_experiment(replace(TINY, approach=approach.name))
-    kernel = init_learners(experiment).params["params"]["UniformDense_0"]["kernel"]
-    env = experiment.env
+    experiment = make_setup(replace(TINY, approach=approach.name))
+    kernel = experiment.init_learners().params["params"]["UniformDense_0"]["kernel"]
+    env = experiment.test_env
     assert kernel.shape[1] == LightSwitchDoor.full_state_size + env.num_skills + 1 + 1  # [seeds, inputs, 32]
-    ours = init_learners(build_experiment(TINY)).params["params"]["UniformDense_0"]["kernel"]
+    ours = make_setup(TINY).init_learners().params["params"]["UniformDense_0"]["kernel"]
     assert ours.shape[1] == LightSwitchDoor.num_features + env.num_skills + 1 + 1
 
     # The full state is the same size for the 5-cell training env and the 20-cell test env, and it
@@ -137,18 +138,18 @@ def test_no_feature_selection_sees_the_padded_full_state(tests_batch):
 
 
 def test_approaches_of_one_experiment_share_its_tasks_and_other_seeds_get_their_own():
-    ours, ablation = build_experiment(TINY), build_experiment(replace(TINY, approach="maple_q"))
+    ours, ablation = make_setup(TINY), make_setup(replace(TINY, approach="maple_q"))
     assert ours.train is ablation.train and ours.test is ablation.test  # built once, not per approach
-    other = build_experiment(replace(TINY, first_seed=1))
+    other = make_setup(replace(TINY, first_seed=1))
     assert other.test is not ours.test and other.test.seeds.tolist() == [1, 1]
     assert ours.test.seeds.tolist() == [0, 0]
 
 
 def test_random_and_pure_planning_leave_the_network_untouched():
     for name in ("random", "pure_planning"):
-        experiment = build_experiment(replace(TINY, approach=name))
-        learners = init_learners(experiment)
-        after, metrics = make_cycle(experiment)(learners)
+        experiment = make_setup(replace(TINY, approach=name))
+        learners = experiment.init_learners()
+        after, metrics = Cycle(experiment)(learners)
         assert all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(learners.params),
                                                         jax.tree.leaves(after.params)))
         assert float(metrics.loss[0]) == 0.0 and int(metrics.buffer_size[0]) == 0

@@ -59,7 +59,7 @@ def test_eval_loads_the_checkpoint(short_run):
     assert "checkpoint of cycle 3" in proc.stdout and "20 cells, 3 doors" not in proc.stdout
     lines = [line for line in proc.stdout.splitlines() if line.strip().startswith(("0 ", "1 "))]
     assert len(lines) == 2
-    bigger = run("eval.py", str(run_dir), "--cells", "25", "--doors", "5", "--num-tasks", "2")
+    bigger = run("eval.py", str(run_dir), "--task-size", "cells=25,doors=5", "--num-tasks", "2")
     assert bigger.returncode == 0, bigger.stderr
     assert "25 cells, 5 doors" in bigger.stdout
 
@@ -131,7 +131,7 @@ def test_an_existing_run_is_not_overwritten(short_run):
 
 
 @pytest.mark.parametrize("args,message", [
-    (["train.py", "--env", "nowhere"], "invalid choice"),
+    (["train.py", "--env", "nowhere"], "unknown env 'nowhere'"),
     (["train.py", "--num-seeds", "0"], "positive integer"),
     (["train.py", "--cycles", "-3"], "positive integer"),
     (["train.py", "--approaches", "ours,clever"], "unknown approach clever"),

@@ -353,3 +353,10 @@ def test_oracle_bridge_solves_every_test_task_of_seeds_0_to_7_within_the_test_ho
 def test_pure_planning_solves_none(results):
     result = results["none"]
     assert not result.success.any() and (result.stuck_events > 10).all()
+
+
+def test_the_env_keeps_the_env_contract():
+    from envs_jax import Coffee
+    from jaxbridge import check_env
+
+    assert check_env(Coffee) is Coffee  # shapes, dtypes, purity, the planner's model, the oracle on its test tasks

@@ -15,7 +15,7 @@ import pytest
 from jaxbridge.run import checkpoint
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh, device_count_arg
-from jaxbridge.learn.online import build_experiment, init_learners
+from jaxbridge.learn.setup import make_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ["--num-seeds", "3", "--cycles", "3", "--updates-per-cycle", "20", "--checkpoint-every", "1",
@@ -37,7 +37,7 @@ def exact(run_dir: Path):
     target, optimizer, replay buffer, keys, counters), the metrics as it records them (float32, exact)
     and the metrics.csv text."""
     config = TrainConfig.from_dict(json.loads((run_dir / "config.json").read_text()))
-    state, record, step = checkpoint.restore(run_dir / "checkpoints", init_learners(build_experiment(config)))
+    state, record, step = checkpoint.restore(run_dir / "checkpoints", make_setup(config).init_learners())
     leaves = [np.asarray(x) for x in jax.tree.leaves(state.replace(key=jax.random.key_data(state.key)))]
     return step, leaves, record["history"], (run_dir / "metrics.csv").read_text()
 

@@ -356,3 +356,10 @@ def test_skill_initiability():
     assert np.asarray(initiable(at_door, skills, slots)).tolist() == [True, True, True, False, True]
     in_other_room = fresh(robot=(0.25, 0.25))  # room (1,0): only the left door is one of its doors
     assert np.asarray(initiable(in_other_room, skills, slots)).tolist() == [False, True, False, False, True]
+
+
+def test_the_env_keeps_the_env_contract():
+    from envs_jax import Doorknobs
+    from jaxbridge import check_env
+
+    assert check_env(Doorknobs) is Doorknobs  # shapes, dtypes, purity, the planner's model, the oracle on its test tasks

@@ -12,12 +12,13 @@ from envs_jax.light_switch_door.env import LightSwitchDoor
 from jaxbridge.run import checkpoint
 from jaxbridge.utils import compile_cache
 from jaxbridge.learn import dqn
-from jaxbridge.core.bridges import make_bridge, random_bridge
+from jaxbridge.core.bridges import RandomBridge, make_bridge
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh
-from jaxbridge.learn.dqn import epsilon, init_learner, learn, minibatch_indices, td_targets
+from jaxbridge.learn.dqn import epsilon, init_learner, learn, make_dqn, minibatch_indices, td_targets
 from jaxbridge.core.meta_policy import Controls, rollout
-from jaxbridge.learn.online import build_experiment, init_learners, make_cycle
+from jaxbridge.learn.online import Cycle
+from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.smoothing import smooth
 from jaxbridge.learn.q_bridge import (SPLIT_FROM_FEATURES, QNetwork, SplitInput, best_candidate, candidate_skills,
                                 candidates_input, encode, input_size, sample_candidates)
@@ -57,7 +58,7 @@ def test_double_dqn_target_on_a_hand_built_batch():
     batch = Transition(features=features, skill=jnp.array([3, 0, 5]), param=jnp.array([0.1, 0.0, 0.0]),
                        reward=jnp.array([0.0, 0.0, 1.0]), done=jnp.array([False, False, True]),
                        next_features=features[::-1], next_num_ground=ground)
-    y = np.asarray(td_targets(ENV, cfg, online, target, batch, jax.random.key(0)))
+    y = np.asarray(td_targets(make_dqn(cfg, ENV, ENV.num_features), online, target, batch, jax.random.key(0)))
 
     def q(params, f, skill, param):
         return float(net.apply(params, encode(ENV, f, jnp.int32(skill), jnp.float32(param))))
@@ -83,7 +84,7 @@ def test_bootstrapped_values_are_clipped_to_the_achievable_range_only_when_asked
                        next_num_ground=jnp.ones((2, ENV.num_skills + 1), jnp.int32))
     for clip, expected in ((False, 0.8 * 5.0), (True, 0.8 * 1.5)):
         cfg = TrainConfig(call_planner_bonus=0.5, clip_bootstrap=clip)
-        y = np.asarray(td_targets(ENV, cfg, high, high, batch, jax.random.key(1)))
+        y = np.asarray(td_targets(make_dqn(cfg, ENV, ENV.num_features), high, high, batch, jax.random.key(1)))
         assert y[0] == pytest.approx(expected) and y[1] == 1.5  # terminal rewards are never clipped
 
 
@@ -93,7 +94,7 @@ def test_an_ensemble_is_the_minimum_of_independent_members_all_fitted_to_the_tar
     assert set(single["params"]) == {"UniformDense_0", "UniformDense_1", "UniformDense_2"}  # old checkpoints load
     pair = QNetwork((32, 32), ensemble=2)
     cfg = TrainConfig(q_ensemble=2, updates_per_cycle=300, n_target_sample=2, buffer_capacity=64, batch_size=64)
-    learner = init_learner(ENV, cfg, jax.random.key(2))
+    learner = init_learner(make_dqn(cfg, ENV, ENV.num_features), jax.random.key(2))
     kernels = jax.tree.leaves(learner.params)
     assert all(k.shape[0] == 2 for k in kernels) and not np.allclose(kernels[1][0], kernels[1][1])
     # A buffer of terminal transitions with reward 1 for skill 0 and 0 otherwise: both members must learn it.
@@ -102,7 +103,7 @@ def test_an_ensemble_is_the_minimum_of_independent_members_all_fitted_to_the_tar
     batch = Transition(features=f, skill=skill, param=jnp.zeros(64), reward=(skill == 0).astype(jnp.float32),
                        done=jnp.ones(64, bool), next_features=f, next_num_ground=jnp.ones((64, ENV.num_skills + 1), jnp.int32))
     learner = learner.replace(buffer=add(learner.buffer, for_buffer(batch), jnp.ones(64, bool)))
-    learner, loss, _ = jax.jit(lambda l: learn(ENV, cfg, l, jnp.int32(64)))(learner)
+    learner, loss, _ = jax.jit(lambda l: learn(make_dqn(cfg, ENV, ENV.num_features), l, jnp.int32(64)))(learner)
     members = pair.apply(learner.params, encode(ENV, f, skill, jnp.zeros(64)), members=True)
     assert members.shape == (2, 64) and np.abs(np.asarray(members) - np.asarray(batch.reward)).max() < 0.2
     value = pair.apply(learner.params, encode(ENV, f, skill, jnp.zeros(64)))
@@ -149,7 +150,7 @@ def test_minibatches_drawn_up_front_are_the_draws_of_one_split_per_update():
     """`learn` draws all its minibatch slots before the updates; they must be the stream an update
     loop splitting the key once per update would draw (the documented runs were made with that loop)."""
     config = TrainConfig(updates_per_cycle=30, batch_size=16)
-    learner = init_learner(ENV, config, jax.random.key(3))
+    learner = init_learner(make_dqn(config, ENV, ENV.num_features), jax.random.key(3))
     learner = learner.replace(buffer=learner.buffer.replace(size=jnp.int32(77)))
     key, indices = minibatch_indices(config, learner)
 
@@ -166,7 +167,7 @@ def test_minibatches_drawn_up_front_are_the_draws_of_one_split_per_update():
 def test_one_transition_per_decision_and_call_planner_spans_the_plan():
     spec = lsd.LightSwitchDoorTask(5, (1,))
     batch = make_batch(LightSwitchDoor, [spec], [0], horizons=[100], env=ENV)
-    result, rec = rollout(ENV, make_bridge("oracle", ENV), None, batch.tasks, batch.tables, batch.horizons,
+    result, rec = rollout(ENV, make_bridge("oracle", ENV), None, batch.arrays,
                           jax.random.split(jax.random.key(0), 1), 100, record=True)
     records = jax.tree.map(lambda x: x[:, 0], rec)
     transitions, valid = episode_transitions(records, result.success[0], ENV.num_skills, 0.5)
@@ -189,14 +190,15 @@ def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap
     monkeypatch.setattr(dqn, "RELABEL_CHUNK", chunk)
     batch = evaluation_batch(LightSwitchDoor, [0, 1], 4)
     controls = Controls(full_state=True)  # the full state: every decision's observation differs
-    result, rec = rollout(batch.env, random_bridge(batch.env), None, batch.tasks, batch.tables, batch.horizons,
+    result, rec = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
                           jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True,
                           controls=controls)
     transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
         rec, result.success, batch.env.num_skills, 0.0)
     capacity = 23
     config = TrainConfig(approach="no_feature_selection", buffer_capacity=capacity, n_target_sample=3)
-    learner = init_learner(batch.env, config, jax.random.key(3))
+    learning = make_dqn(config, batch.env, batch.env.full_state_size)
+    learner = init_learner(learning, jax.random.key(3))
     noisy = lambda params, key: jax.tree.map(lambda p: p + 0.3 * jax.random.normal(key, p.shape), params)
     learner = learner.replace(params=noisy(learner.params, jax.random.key(1)),
                               target_params=noisy(learner.params, jax.random.key(2)))
@@ -216,12 +218,12 @@ def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap
         differ += int(np.any(restored != np.asarray(learner.buffer.data.features)[live], axis=1).sum())
 
         key = jax.random.key(first)
-        targets = np.asarray(dqn.relabel(batch.env, config, learner, key))
+        targets = np.asarray(dqn.relabel(learning, learner, key))
         chunks = -(-capacity // chunk)
         pad = lambda x: jnp.pad(x, [(0, chunks * chunk - capacity)] + [(0, 0)] * (x.ndim - 1))
         padded = jax.tree.map(pad, full.data)
         expected = np.concatenate([np.asarray(td_targets(
-            batch.env, config, learner.params, learner.target_params,
+            learning, learner.params, learner.target_params,
             jax.tree.map(lambda x: x[i * chunk:(i + 1) * chunk], padded), jax.random.fold_in(key, i)))
             for i in range(chunks)])
         assert np.array_equal(targets[slots], expected[slots])
@@ -230,22 +232,22 @@ def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap
 
 def test_a_cycle_whose_episodes_could_overflow_the_buffer_in_one_insert_is_refused():
     fits = TrainConfig(num_seeds=1, num_test_tasks=2, buffer_capacity=5 * 100)
-    make_cycle(build_experiment(fits))
+    Cycle(make_setup(fits))
     with pytest.raises(ValueError, match=r"5 episodes x 100 steps per cycle must fit the replay buffer \(499"):
-        make_cycle(build_experiment(replace(fits, buffer_capacity=499)))
+        Cycle(make_setup(replace(fits, buffer_capacity=499)))
 
 
 def test_different_seeds_get_different_networks_and_the_same_seed_the_same():
-    a = init_learner(ENV, TINY, jax.random.key(0))
-    b = init_learner(ENV, TINY, jax.random.key(1))
-    c = init_learner(ENV, TINY, jax.random.key(0))
+    a = init_learner(make_dqn(TINY, ENV, ENV.num_features), jax.random.key(0))
+    b = init_learner(make_dqn(TINY, ENV, ENV.num_features), jax.random.key(1))
+    c = init_learner(make_dqn(TINY, ENV, ENV.num_features), jax.random.key(0))
     kernel = lambda learner: np.asarray(learner.params["params"]["UniformDense_0"]["kernel"])
     assert not np.array_equal(kernel(a), kernel(b)) and np.array_equal(kernel(a), kernel(c))
 
 
 def _train(config, experiment=None, cycle=None):
-    experiment = experiment or build_experiment(config)
-    learners, cycle = init_learners(experiment), cycle or make_cycle(experiment)
+    experiment = experiment or make_setup(config)
+    learners, cycle = experiment.init_learners(), cycle or Cycle(experiment)
     history = []
     for _ in range(config.cycles):
         learners, metrics = cycle(learners)
@@ -258,12 +260,12 @@ def tiny_twice():
     """TINY trained twice from scratch with one compiled cycle on one device (compiling is most of a short
     run's time; identity across processes is checked by the resume tests of test_reliability.py), with
     the programs traced and compiled during each cycle (jax.monitoring, jaxbridge.utils.compile_cache)."""
-    experiment = build_experiment(TINY)
+    experiment = make_setup(TINY)
     seeds = SeedMesh(TINY.num_seeds)  # one device: where XLA once handed back replicated leaves
-    cycle = make_cycle(experiment, seeds)
+    cycle = Cycle(experiment, seeds)
     runs, compiled = [], []
     for _ in range(2):
-        learners, history = seeds.place(init_learners(experiment)), []
+        learners, history = seeds.place(experiment.init_learners()), []
         for _ in range(TINY.cycles):
             with compile_cache.record() as record:
                 learners, metrics = cycle(learners)
@@ -296,12 +298,12 @@ def test_checkpoint_round_trip_restores_identical_greedy_actions(tiny_twice, tmp
     experiment, seeds, _, ((learners, _), _), _ = tiny_twice
     learners = seeds.unpad(learners)
     checkpoint.save(tmp_path / "ckpt", 3, learners, {"cycle": 3})
-    fresh = init_learners(experiment)
+    fresh = experiment.init_learners()
     restored, record, step = checkpoint.restore(tmp_path / "ckpt", fresh)
     assert step == 3 and record == {"cycle": 3}
     as_data = lambda tree: jax.tree.leaves(tree.replace(key=jax.random.key_data(tree.key)))
     assert all(np.array_equal(x, y) for x, y in zip(as_data(learners), as_data(restored)))
-    net, skills = experiment.net, candidate_skills(ENV, 10)
+    net, skills = experiment.dqn.net, candidate_skills(ENV, 10)
     features = jax.random.uniform(jax.random.key(5), (32, ENV.num_features))
     ground = jnp.ones((32, ENV.num_skills + 1), jnp.int32)
     keys = jax.random.split(jax.random.key(6), 32)
@@ -324,7 +326,7 @@ def test_a_checkpoint_whose_buffer_still_holds_next_features_restores(tiny_twice
     old_layout = learners.replace(buffer=learners.buffer.replace(data=data.replace(
         next_features=jnp.roll(data.features, -1, axis=1))))
     checkpoint.save(tmp_path / "old", 3, old_layout, {"cycle": 3})
-    restored, _, _ = checkpoint.restore(tmp_path / "old", init_learners(experiment))
+    restored, _, _ = checkpoint.restore(tmp_path / "old", experiment.init_learners())
     assert restored.buffer.data.next_features is None
     as_data = lambda tree: jax.tree.leaves(tree.replace(key=jax.random.key_data(tree.key)))
     assert all(np.array_equal(x, y) for x, y in zip(as_data(learners), as_data(restored)))
@@ -341,7 +343,7 @@ def test_smooth_reward_is_the_papers_trailing_window():
     assert s[0, 31] == 0.0
 
 
-def test_a_short_learning_run_beats_the_random_bridge():
+def test_a_short_learning_run_beats_the_RandomBridge():
     config = TrainConfig(num_seeds=2, first_seed=1, cycles=12, updates_per_cycle=500, num_test_tasks=5)
     experiment, _, history = _train(config)
     learned = np.stack([m.test_solve_rate for m in history[-5:]]).mean(0)  # per seed, last 5 cycles

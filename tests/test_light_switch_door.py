@@ -152,3 +152,10 @@ def test_reset_and_step_jit_and_vmap_over_seeds_and_tasks():
     # Each task's first door decides whether the robot could leave cell 0.
     blocked = np.array([0 in s.door_cells for s in specs])
     assert np.array_equal(np.asarray(batched.robot_x) == 0.5, blocked)
+
+
+def test_the_env_keeps_the_env_contract():
+    from envs_jax import LightSwitchDoor
+    from jaxbridge import check_env
+
+    assert check_env(LightSwitchDoor) is LightSwitchDoor  # shapes, dtypes, purity, the planner's model, the oracle on its test tasks

@@ -21,9 +21,9 @@ def batch():
 
 def run(batch, bridge_name, seed=0, record=False, tables=None):
     bridge = make_bridge(bridge_name, batch.env)
-    result, records = rollout(batch.env, bridge, None, batch.tasks, batch.tables if tables is None else tables,
-                              batch.horizons, jax.random.split(jax.random.key(seed), batch.size), batch.max_steps,
-                              record=record)
+    arrays = batch.arrays if tables is None else batch.arrays.replace(tables=tables)
+    result, records = rollout(batch.env, bridge, None, arrays, jax.random.split(jax.random.key(seed), batch.size),
+                              batch.max_steps, record=record)
     return jax.tree.map(np.asarray, result), (None if records is None else jax.tree.map(np.asarray, records))
 
 
@@ -84,7 +84,7 @@ def test_expected_atoms_that_fail_make_the_planner_stuck():
     # Corrupt the model's predictions: after its first move the planner expects an impossible state.
     spec = lsd.LightSwitchDoorTask(6, (4,))
     b = make_batch(LightSwitchDoor, [spec], [0])
-    broken = b.tables.replace(next_keys=jnp.full_like(b.tables.next_keys, 0xFFFFFFFF))
+    broken = b.arrays.tables.replace(next_keys=jnp.full_like(b.arrays.tables.next_keys, 0xFFFFFFFF))
     _, rec = run(b, "none", record=True, tables=broken)
     first_stuck = rec.stuck[:, 0].tolist().index(True)
     assert first_stuck == 1 and rec.env_state.robot_x[1, 0] == 1.5  # the move worked, the check did not

@@ -17,7 +17,7 @@ import pytest
 
 from jaxbridge.run import checkpoint
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.learn.online import build_experiment, init_learners
+from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.runner import NumericalFault, prepare_run_dir, train
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,7 +31,7 @@ def cli(*args):
 
 def final_params(run_dir: Path):
     config = TrainConfig.from_dict(json.loads((run_dir / "config.json").read_text()))
-    state, _, step = checkpoint.restore(run_dir / "checkpoints", init_learners(build_experiment(config)))
+    state, _, step = checkpoint.restore(run_dir / "checkpoints", make_setup(config).init_learners())
     return step, jax.tree.leaves(state.params)
 
 
@@ -92,7 +92,7 @@ def test_a_non_finite_q_function_stops_the_run_and_keeps_the_last_good_checkpoin
         return learners.replace(params=params)
 
     with pytest.raises(NumericalFault, match="cycle 3 in seed 1.*checkpoint is of cycle 2"):
-        train(config, run_dir, progress=False, fault_injection=poison)
+        train(make_setup(config), run_dir, progress=False, fault_injection=poison)
     assert checkpoint.sealed_steps(run_dir / "checkpoints") == [1, 2]
     rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
     assert {r["cycle"] for r in rows} == {"1", "2"}  # the files cover the good cycles only

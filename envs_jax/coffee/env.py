@@ -118,6 +118,14 @@ class Coffee(NoveltyEnv):
     def full_state_fits(self) -> bool:
         return self.max_cups <= MAX_CUPS
 
+    task_sizes = {"cups": f"cups to fill (1 to {max(world.SWEEP_CUPS)})"}
+
+    @classmethod
+    def sized_task(cls, rng, cups: int) -> CoffeeTask:
+        if not 1 <= cups <= max(world.SWEEP_CUPS):
+            raise ValueError(f"cups must be 1 to {max(world.SWEEP_CUPS)}, got {cups}")
+        return world.sample_task(rng, (cups,))
+
     def drawer(self):
         from envs_jax.coffee.drawer import DRAWER  # matplotlib: only when drawing
         return DRAWER

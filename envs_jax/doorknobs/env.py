@@ -20,21 +20,17 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.doorknobs import maps
 from envs_jax import geometry
-from envs_jax.doorknobs import roadmap
+from envs_jax.doorknobs import maps, motion
 from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
 from envs_jax.doorknobs.maps import (
     ACTION_MAGNITUDE,
     BOTTOM,
-    CLEARANCE,
-    GOAL_NODES,
     LEFT,
     MAX_CLUTTER,
     RIGHT,
     ROBOT_RADIUS,
     ROOM_SIZE,
-    SIDE_NORMAL,
     TEST_MAP_SIZE,
     TOP,
     WALLS_PER_ROOM,
@@ -160,6 +156,14 @@ class Doorknobs(NoveltyEnv):
     # "No feature selection": every object's raw features, padded to the largest (5x5) map.
     full_state_size: ClassVar[int] = (2 + 2 * TEST_MAP_SIZE ** 2 + 12 * 2 * TEST_MAP_SIZE ** 2
                                       + 5 * (WALLS_PER_ROOM + MAX_CLUTTER) * TEST_MAP_SIZE ** 2)
+
+    task_sizes = {"map": "rooms per side of the map", "doors": "doors between the start and the goal room"}
+
+    @classmethod
+    def sized_task(cls, rng: np.random.Generator, map: int = TEST_MAP_SIZE, doors: int | None = None) -> DoorknobsTask:
+        if map < 2 or (doors is not None and not 1 <= doors < map * map):
+            raise ValueError(f"need map >= 2 and 1 <= doors < map x map, got map {map}, doors {doors}")
+        return maps.sample_task(rng, map, doors, max_tries=100)
 
     def drawer(self):
         from envs_jax.doorknobs.drawer import DRAWER  # matplotlib: only when drawing
@@ -327,28 +331,6 @@ class Doorknobs(NoveltyEnv):
             placed(task.clutter, task.clutter_mask, room_at, rooms)])
 
     # ---- device: skills ---------------------------------------------------------------------------
-    def _sight(self, state: State, room: jax.Array) -> tuple[jax.Array, jax.Array]:
-        """The room's roadmap waypoints float32[K, 2] and which of them the robot sees, bool[K]: the
-        hot part of motion, the same whichever doorway the robot heads for."""
-        rects, mask = maps.route_obstacles(state.task, room, state.door_open, state.robot)
-        nodes = state.task.nodes[room]
-        return nodes, roadmap.visible(state.robot, nodes, rects, mask, CLEARANCE)
-
-    def _leads(self, state: State, nodes: jax.Array, seen: jax.Array, side: jax.Array) -> jax.Array:
-        """bool[K]: the seen waypoints the robot may head for on its way to the doorway on `side`: its
-        goal only from its entry cone."""
-        goal = GOAL_NODES + side
-        cone = maps.in_entry_cone(state.robot, nodes[goal], jnp.asarray(SIDE_NORMAL)[side])
-        return seen & ((jnp.arange(nodes.shape[0]) != goal) | cone)
-
-    def _route(self, state: State, room: jax.Array, side: jax.Array) -> jax.Array:
-        """MoveToDoor's next step toward the doorway on `side` of `room` (zero: no path). Follows the
-        task's precomputed roadmap from wherever the robot is."""
-        nodes, seen = self._sight(state, room)
-        step, _ = roadmap.pursue(state.robot, nodes, state.task.node_cost[room, side],
-                                 self._leads(state, nodes, seen, side), ACTION_MAGNITUDE)
-        return step
-
     def _door_side(self, state: State, door: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
         """(robot's room, the side of that room holding `door`, whether it does)."""
         room, in_any = self.robot_room(state)
@@ -363,7 +345,7 @@ class Doorknobs(NoveltyEnv):
     def skill_action(self, state: State, call: SkillCall) -> jax.Array:
         door = call.slot
         room, side, has_door = self._door_side(state, door)
-        to_door = self._route(state, room, side)
+        to_door = motion.route(state, room, side)
         owner_side = self.in_room(state)[jnp.asarray(self._layout[0])[door, 0]]
         far_point = state.task.door_point[door, jnp.where(owner_side, 1, 0)]
         zero = jnp.zeros(1, jnp.float32)
@@ -387,8 +369,8 @@ class Doorknobs(NoveltyEnv):
         """MoveToDoor: the door is in the robot's room and the roadmap reaches it from here (the authors:
         BiRRT finds a path); MoveThroughDoor: the robot is in the door's doorway; OpenDoor: always."""
         room, in_any = self.robot_room(state)
-        nodes, seen = self._sight(state, room)
-        leads = jax.vmap(partial(self._leads, state, nodes, seen))(jnp.arange(4))  # [side, K]
+        nodes, seen = motion.sight(state, room)
+        leads = jax.vmap(partial(motion.leads, state, nodes, seen))(jnp.arange(4))  # [side, K]
         # A path exists iff some waypoint it may head for has a finite cost (what MoveToDoor's pursuit finds).
         paths = jnp.any(leads & jnp.isfinite(state.task.node_cost[room]), axis=-1)
         room_doors = jnp.asarray(self._layout[1])[room]  # int32[4], -1: no door slot on that side

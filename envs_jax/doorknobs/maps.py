@@ -142,14 +142,18 @@ def door_distances(rooms, doors, start: tuple[int, int]) -> dict[tuple[int, int]
     return breadth_first_distances(neighbours, [start])
 
 
-def sample_task(rng: np.random.Generator, size: int, doors_to_goal: int | None = None) -> DoorknobsTask:
+def sample_task(rng: np.random.Generator, size: int, doors_to_goal: int | None = None,
+                max_tries: int | None = None) -> DoorknobsTask:
     """A task on a size x size map (the authors' draw order). With `doors_to_goal`, the goal is drawn
     among the rooms exactly that many doors from the start, and the whole task is redrawn while there is
-    none (the generalisation sweep's tasks)."""
-    while True:
+    none (the generalisation sweep's tasks), at most `max_tries` times (ValueError then)."""
+    tries = 0
+    while max_tries is None or tries < max_tries:
         task = _sample_task(rng, size, doors_to_goal)
         if task is not None:
             return task
+        tries += 1
+    raise ValueError(f"no {size}x{size} map with a room {doors_to_goal} doors from the start in {max_tries} draws")
 
 
 def _sample_task(rng: np.random.Generator, size: int, doors_to_goal: int | None) -> DoorknobsTask | None:

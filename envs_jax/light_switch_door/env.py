@@ -163,6 +163,12 @@ class LightSwitchDoor(NoveltyEnv):
     novelty_sweep = NoveltySweep("doors", f"in a row of {SWEEP_CELLS} cells", SWEEP_DOORS, sweep_task,
                                  horizon=lambda spec: spec.horizon)
 
+    task_sizes = {"cells": "cells in the row", "doors": "doors, in distinct cells but the light's"}
+
+    @classmethod
+    def sized_task(cls, rng: np.random.Generator, cells: int, doors: int) -> LightSwitchDoorTask:
+        return sized_task(rng, cells, doors)
+
     def drawer(self):
         from envs_jax.light_switch_door.drawer import DRAWER  # matplotlib: only when drawing
         return DRAWER

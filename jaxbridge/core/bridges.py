@@ -1,10 +1,12 @@
 """Hand-made bridge policies: random, pure planning ("none") and each env's oracle.
 
-A bridge is a pure function `(params, obs: BridgeObs, key) -> BridgeAction`, called once per decision.
-`params` is whatever the bridge learns (None for these). Skill index `num_skills` is CallPlanner.
+A bridge is a pure function `(params, obs: BridgeObs, key) -> BridgeAction`, called once per decision;
+`params` is whatever it learns (None for these). Skill index `num_skills` is CallPlanner. Bridges are
+frozen dataclasses, equal when their fields are, so equal bridges are one static argument to `jax.jit`.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Callable
 
 import jax
@@ -15,14 +17,16 @@ from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv
 Bridge = Callable[[object, BridgeObs, jax.Array], BridgeAction]
 
 
-def random_bridge(env: NoveltyEnv) -> Bridge:
+@dataclass(frozen=True)
+class RandomBridge:
     """A uniformly random applicable skill, CallPlanner included once it is applicable, with a parameter
     from the skill's sampler; the meta-policy then grounds it uniformly among its applicable ground
-    operators. (The authors drew uniformly over ground operators instead, so a skill with two ground
-    instances, like MoveRobot left/right, took twice the share; uniform over skills reaches an opened door
-    and CallPlanner there 2.5x as often on Light Switch Door, see docs/RESULTS.md.)"""
+    operators (the authors drew over ground operators instead: docs/DESIGN.md)."""
 
-    def act(params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
+    env: NoveltyEnv
+
+    def __call__(self, params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
+        env = self.env
         k_skill, k_param = jax.random.split(key)
         weights = (obs.num_ground > 0).astype(jnp.float32)
         skill = jax.random.categorical(k_skill, jnp.log(weights))  # log 0 = -inf: never chosen
@@ -30,28 +34,35 @@ def random_bridge(env: NoveltyEnv) -> Bridge:
         param = jnp.where(skill < env.num_skills, params_all[jnp.minimum(skill, env.num_skills - 1)], 0.0)
         return BridgeAction(skill=skill.astype(jnp.int32), param=param)
 
-    return act
+
+@dataclass(frozen=True)
+class PurePlanningBridge:
+    """No bridge: whenever the plan is stuck, re-plan from the current state (the paper's pure planning
+    baseline). CallPlanner's "state changed" precondition does not apply to it."""
+
+    env: NoveltyEnv
+
+    def __call__(self, params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
+        return BridgeAction(skill=jnp.int32(self.env.num_skills), param=jnp.float32(0.0))
 
 
-def pure_planning_bridge(env: NoveltyEnv) -> Bridge:
-    """No bridge: whenever the plan is stuck, re-plan from the current state (the paper's pure
-    planning baseline). CallPlanner's "state changed" precondition does not apply to it."""
+@dataclass(frozen=True)
+class OracleBridge:
+    """The env's hand-written novelty fixer (`NoveltyEnv.oracle_bridge`, e.g. set the door keys, then
+    CallPlanner)."""
 
-    def act(params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
-        return BridgeAction(skill=jnp.int32(env.num_skills), param=jnp.float32(0.0))
+    env: NoveltyEnv
 
-    return act
-
-
-def oracle_bridge(env: NoveltyEnv) -> Bridge:
-    """The env's hand-written novelty fixer (e.g. set the door keys, then CallPlanner)."""
-    return env.oracle_bridge
+    def __call__(self, params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
+        return self.env.oracle_bridge(params, obs, key)
 
 
-BRIDGES = {"oracle": oracle_bridge, "random": random_bridge, "none": pure_planning_bridge}
+BRIDGES = {"oracle": OracleBridge, "random": RandomBridge, "none": PurePlanningBridge}
 
 
 def make_bridge(name: str, env: NoveltyEnv) -> Bridge:
     if name not in BRIDGES:
         raise ValueError(f"unknown bridge {name!r}; choose from {', '.join(BRIDGES)}")
+    if name == "oracle" and not env.has_oracle:
+        raise ValueError(f"env {env.name!r} has no oracle bridge")
     return BRIDGES[name](env)

@@ -30,6 +30,7 @@ from flax import struct
 from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, BridgeObs, NoveltyEnv, SkillCall,
                            idle_call, tree_where)
 from jaxbridge.core.bridges import Bridge
+from jaxbridge.core.tasks import TaskArrays
 from planner.tables import PlanLookup, PlanTable, batched_plan_lookup, holds_all, num_words, pack_atoms
 
 PLANNER, BRIDGE = 0, 1  # who is in control of an episode
@@ -145,11 +146,11 @@ def observe(env: NoveltyEnv, ep: Episode):
     return ep, pack_atoms(env.abstract(ep.env_state)), need_plan
 
 
-def applicable_ops(env: NoveltyEnv, table: PlanTable, key: jax.Array, state: Any) -> jax.Array:
+def applicable_ops(env: NoveltyEnv, table: PlanTable, atoms: jax.Array, state: Any) -> jax.Array:
     """bool[O]: ground operators whose preconditions hold and whose skill can start.
 
     These are the bridge's ground actions (the authors' applicable ground NSRTs)."""
-    pre_hold = holds_all(table.op_pre, key[None, :])
+    pre_hold = holds_all(table.op_pre, atoms[None, :])
     return table.op_valid & pre_hold & env.skill_initiable(state, table.op_skill, table.op_slot)
 
 
@@ -177,7 +178,7 @@ def hashed_choice(mask: jax.Array, bits: jax.Array) -> jax.Array:
     return (best & jnp.uint32((1 << index_bits) - 1)).astype(jnp.int32)
 
 
-def planner_turn(env: NoveltyEnv, ep: Episode, key: jax.Array, plan: PlanLookup, table: PlanTable,
+def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, plan: PlanLookup, table: PlanTable,
                  u_param: jax.Array) -> tuple[Episode, jax.Array]:
     """Follow the plan; on stuck hand control to the bridge; say whether the bridge must choose."""
     state, live = ep.env_state, ~ep.done
@@ -185,7 +186,7 @@ def planner_turn(env: NoveltyEnv, ep: Episode, key: jax.Array, plan: PlanLookup,
     planning = live & (ep.control == PLANNER)
     repeated = planning & ep.planner_stepped & same_state(vec, ep.prev_vec)
     needs_op = planning & ~ep.call.running
-    can_continue = plan.found & (plan.op >= 0) & holds_all(ep.expected, key)
+    can_continue = plan.found & (plan.op >= 0) & holds_all(ep.expected, atoms)
     stuck = repeated | (needs_op & ~can_continue)
     start_op = needs_op & ~stuck
 
@@ -208,17 +209,17 @@ def planner_turn(env: NoveltyEnv, ep: Episode, key: jax.Array, plan: PlanLookup,
 
 
 def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any, ep: Episode,
-                table: PlanTable, key: jax.Array, rng: jax.Array, choice_bits: jax.Array) -> Decision:
+                table: PlanTable, atoms: jax.Array, key: jax.Array, choice_bits: jax.Array) -> Decision:
     """The bridge observes, chooses a skill and parameter, and the choice is grounded uniformly at
     random among the applicable ground operators of that skill (the Q-function does not see objects).
     CallPlanner is applicable once the state changed since the bridge took over (and never without it)."""
     state = ep.env_state
     vec = env.state_vector(state)
-    op_ok = applicable_ops(env, table, key, state)
+    op_ok = applicable_ops(env, table, atoms, state)
     can_plan = ~same_state(vec, ep.bridge_vec) & controls.call_planner
     num_ground = jnp.concatenate([count_by_skill(env, table, op_ok), can_plan[None].astype(jnp.int32)])
     obs = BridgeObs(features=observation(env, controls, state, ep.stuck_state), num_ground=num_ground)
-    choice = bridge(params, obs, rng)
+    choice = bridge(params, obs, key)
     skill = jnp.clip(choice.skill, 0, env.num_skills if controls.call_planner else env.num_skills - 1)
     op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)
     return Decision(skill=skill.astype(jnp.int32), slot=table.op_slot[op], param=choice.param,
@@ -278,15 +279,15 @@ def no_plan(num_episodes: int, words: int) -> PlanLookup:
 
 
 @partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls"))
-def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, tasks: Any, tables: PlanTable,
-            horizons: jax.Array, keys: jax.Array, max_steps: int, record: bool = False,
-            controls: Controls = Controls()):
+def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArrays, keys: jax.Array,
+            max_steps: int, record: bool = False, controls: Controls = Controls()):
     """Run the meta-policy on a batch of B episodes for at most `max_steps` env steps.
 
-    tasks, tables, horizons, keys (one per episode) and bridge_params (None, or a pytree) carry a
-    leading batch axis B. `controls` picks the approach's parts of the meta-policy.
+    `batch` (the episodes' tasks, plan tables and horizons), keys (one per episode) and bridge_params (None,
+    or a pytree) carry a leading batch axis B. `controls` picks the approach's parts of the meta-policy.
     Returns EpisodeResult[B] and, with `record`, StepRecord[max_steps, B].
     """
+    tasks, tables, horizons = batch.tasks, batch.tables, batch.horizons
     num_episodes = horizons.shape[0]
     episodes = jax.vmap(partial(start_episode, env, controls))(tasks, horizons)
     no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),

@@ -4,24 +4,33 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import jax
 import jax.numpy as jnp
 import numpy as np
+from flax import struct
 
 from envs_jax.base import NoveltyEnv
 from planner.tables import CompiledTask, PlanTable, compile_task, stack_tables
 
 
+@struct.dataclass
+class TaskArrays:
+    """What a rollout needs of B episodes' tasks, on the device: one pytree with leading axis B."""
+
+    tasks: Any  # the env's Task struct
+    tables: PlanTable  # the planner's plan tables
+    horizons: jax.Array  # int32[B]: env steps per episode at most
+
+
 @dataclass
 class TaskBatch:
-    """B tasks of one env, padded to one capacity: everything a rollout needs, plus host views."""
+    """B tasks of one env, padded to one capacity: the device arrays a rollout needs, plus host views."""
 
     env: NoveltyEnv
     specs: list
     seeds: np.ndarray  # int[B]: the seed each task belongs to
     compiled: list[CompiledTask]
-    tasks: Any  # the env's Task struct, leading axis B
-    tables: PlanTable  # leading axis B
-    horizons: jnp.ndarray  # int32[B]
+    arrays: TaskArrays
 
     @property
     def size(self) -> int:
@@ -29,7 +38,15 @@ class TaskBatch:
 
     @property
     def max_steps(self) -> int:
-        return int(np.max(np.asarray(self.horizons)))
+        return int(np.max(np.asarray(self.arrays.horizons)))
+
+    @property
+    def tasks(self) -> Any:
+        return self.arrays.tasks
+
+    @property
+    def horizons(self) -> jax.Array:
+        return self.arrays.horizons
 
 
 def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizons: list[int] | None = None,
@@ -42,9 +59,9 @@ def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizon
             once[spec] = compile_task(env, spec)
     compiled = [once[spec] for spec in specs]
     horizons = [s.horizon for s in specs] if horizons is None else horizons
-    return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(seeds), compiled=compiled,
-                     tasks=env.stack_tasks(specs), tables=stack_tables(compiled),
-                     horizons=jnp.asarray(horizons, jnp.int32))
+    arrays = TaskArrays(tasks=env.stack_tasks(specs), tables=stack_tables(compiled),
+                        horizons=jnp.asarray(horizons, jnp.int32))
+    return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(seeds), compiled=compiled, arrays=arrays)
 
 
 def evaluation_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10) -> TaskBatch:

@@ -7,13 +7,12 @@ shared, so a difference in results is the approach's defining difference and not
 """
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
 from envs_jax.base import NoveltyEnv
-from jaxbridge.core.bridges import Bridge, pure_planning_bridge, random_bridge
-from jaxbridge.core.meta_policy import Controls
-from jaxbridge.learn.q_bridge import QNetwork, make_q_bridge
+from jaxbridge.core.bridges import Bridge, PurePlanningBridge, RandomBridge
+from jaxbridge.core.meta_policy import Controls, observation_size
+from jaxbridge.learn.q_bridge import QBridge, QNetwork
 
 
 @dataclass(frozen=True)
@@ -28,13 +27,15 @@ class Approach:
     def learns(self) -> bool:
         return self.bridge == "q"
 
-    @functools.lru_cache(maxsize=64)
     def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int) -> Bridge:
-        """The approach's bridge; one object per (env, net, n_sample), so that programs compiled for it
-        (the bridge is a static argument of the rollout) serve every later call with equal arguments."""
+        """The approach's bridge (equal arguments give equal bridges: one compiled rollout serves them)."""
         if self.bridge == "q":
-            return make_q_bridge(env, net, n_sample)
-        return random_bridge(env) if self.bridge == "random" else pure_planning_bridge(env)
+            return QBridge(env, net, n_sample)
+        return RandomBridge(env) if self.bridge == "random" else PurePlanningBridge(env)
+
+    def observation_size(self, env: NoveltyEnv) -> int:
+        """The width of what its bridge sees on `env`."""
+        return observation_size(env, self.controls)
 
 
 APPROACHES = {a.name: a for a in (

@@ -1,6 +1,7 @@
 """Double DQN for the bridge policy: learner state, epsilon schedule, targets, minibatch updates."""
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import jax
@@ -9,9 +10,7 @@ import optax
 from flax import struct
 
 from envs_jax.base import NoveltyEnv
-from jaxbridge.learn.approaches import get_approach
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.meta_policy import observation_size
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
 from jaxbridge.learn.replay import ReplayBuffer, init_buffer, sample_indices
@@ -31,12 +30,28 @@ class Learner:
     updates: jax.Array  # int32: minibatch updates so far
 
 
+@dataclass(frozen=True)
+class DQN:
+    """The learner's static side, resolved once from a config (learn/setup.py): what every function
+    below needs besides the learner state."""
+
+    env: NoveltyEnv  # the training env: its capacity fixes the shapes
+    config: TrainConfig
+    net: QNetwork
+    optimizer: optax.GradientTransformation
+    num_features: int  # the approach's observation width (object-centric features or the full state)
+
+
 def q_network(config: TrainConfig) -> QNetwork:
     return QNetwork(config.hidden_sizes, config.q_ensemble)
 
 
 def make_optimizer(config: TrainConfig) -> optax.GradientTransformation:
     return clipped_adam(config.grad_clip, config.learning_rate)
+
+
+def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int) -> DQN:
+    return DQN(env, config, q_network(config), make_optimizer(config), num_features)
 
 
 def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:
@@ -52,25 +67,22 @@ def empty_transition(num_features: int, num_skills: int) -> Transition:
                                  next_num_ground=jnp.zeros(num_skills + 1, jnp.int32)))
 
 
-def init_learner(env: NoveltyEnv, config: TrainConfig, key: jax.Array) -> Learner:
-    """A fresh network (the target starts as its copy), optimiser and empty replay buffer. The input
-    size follows the approach's observation (object-centric features or the full state)."""
+def init_learner(dqn: DQN, key: jax.Array) -> Learner:
+    """A fresh network (the target starts as its copy), optimiser and empty replay buffer."""
     k_init, k_run = jax.random.split(key)
-    net = q_network(config)
-    num_features = observation_size(env, get_approach(config.approach).controls)
-    params = net.init(k_init, jnp.zeros((1, input_size(env, num_features)), jnp.float32))
+    env, num_features = dqn.env, dqn.num_features
+    params = dqn.net.init(k_init, jnp.zeros((1, input_size(env, num_features)), jnp.float32))
     return Learner(params=params, target_params=jax.tree.map(jnp.copy, params),
-                   opt_state=make_optimizer(config).init(params),
-                   buffer=init_buffer(empty_transition(num_features, env.num_skills), config.buffer_capacity),
+                   opt_state=dqn.optimizer.init(params),
+                   buffer=init_buffer(empty_transition(num_features, env.num_skills), dqn.config.buffer_capacity),
                    key=k_run,
                    decisions=jnp.int32(0), updates=jnp.int32(0))
 
 
-def td_targets(env: NoveltyEnv, config: TrainConfig, params: Any, target_params: Any, batch: Transition,
-               key: jax.Array) -> jax.Array:
+def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key: jax.Array) -> jax.Array:
     """Double DQN: the online net picks a* among the next state's applicable actions (n_target_sample
     parameter samples per skill), the target net values it; no bootstrapping past `done`."""
-    net = q_network(config)
+    env, config, net = dqn.env, dqn.config, dqn.net
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
     best, _ = jax.vmap(lambda f, g, k: best_candidate(env, net, params, f, g, skills, k))(
@@ -84,7 +96,7 @@ def td_targets(env: NoveltyEnv, config: TrainConfig, params: Any, target_params:
 RELABEL_CHUNK = 1024
 
 
-def relabel(env: NoveltyEnv, config: TrainConfig, learner: Learner, key: jax.Array) -> jax.Array:
+def relabel(dqn: DQN, learner: Learner, key: jax.Array) -> jax.Array:
     """float32[capacity]: TD targets of every stored transition, recomputed once per cycle with the
     current nets (as the authors' code does), in chunks up to the buffer's fill level."""
     buffer = learner.buffer
@@ -96,7 +108,7 @@ def relabel(env: NoveltyEnv, config: TrainConfig, learner: Learner, key: jax.Arr
         batch = jax.tree.map(lambda x: x[i], data)
         slots = i * RELABEL_CHUNK + jnp.arange(RELABEL_CHUNK)
         batch = batch.replace(next_features=successor_features(buffer.data.features, slots))
-        y = td_targets(env, config, learner.params, learner.target_params, batch, jax.random.fold_in(key, i))
+        y = td_targets(dqn, learner.params, learner.target_params, batch, jax.random.fold_in(key, i))
         return targets.at[i].set(y)
 
     filled = (buffer.size + RELABEL_CHUNK - 1) // RELABEL_CHUNK
@@ -104,11 +116,10 @@ def relabel(env: NoveltyEnv, config: TrainConfig, learner: Learner, key: jax.Arr
     return targets.reshape(-1)[: buffer.capacity]
 
 
-def update_step(env: NoveltyEnv, config: TrainConfig, learner: Learner, targets: jax.Array,
-                index: jax.Array) -> tuple[Learner, jax.Array]:
+def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array) -> tuple[Learner, jax.Array]:
     """One Adam step on the minibatch of (transition, target) at buffer slots `index`, then a polyak
     step of the target net."""
-    net = q_network(config)
+    env, config, net = dqn.env, dqn.config, dqn.net
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
 
     def loss_fn(params):
@@ -116,7 +127,7 @@ def update_step(env: NoveltyEnv, config: TrainConfig, learner: Learner, targets:
         return jnp.mean((q - targets[index]) ** 2), jnp.max(jnp.abs(q))  # every member fits the targets
 
     (loss, q_abs_max), grads = jax.value_and_grad(loss_fn, has_aux=True)(learner.params)
-    updates, opt_state = make_optimizer(config).update(grads, learner.opt_state, learner.params)
+    updates, opt_state = dqn.optimizer.update(grads, learner.opt_state, learner.params)
     params = optax.apply_updates(learner.params, updates)
     target = learner.target_params
     if config.polyak_per == "update":
@@ -150,14 +161,14 @@ def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) ->
     return learner.replace(target_params=target)
 
 
-def learn(env: NoveltyEnv, config: TrainConfig, learner: Learner,
-          decisions: jax.Array) -> tuple[Learner, jax.Array, jax.Array]:
+def learn(dqn: DQN, learner: Learner, decisions: jax.Array) -> tuple[Learner, jax.Array, jax.Array]:
     """After a cycle's episodes (`decisions` training bridge decisions): track the target net, relabel
     the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty).
     Returns the learner, the mean loss and the largest |Q| predicted in the minibatches."""
+    config = dqn.config
     learner = track_target(config, learner, decisions)
     key, k_relabel = jax.random.split(learner.key)
-    targets = relabel(env, config, learner, k_relabel)
+    targets = relabel(dqn, learner, k_relabel)
     learner = learner.replace(key=key)
 
     if config.updates_per_cycle == 0:
@@ -166,7 +177,7 @@ def learn(env: NoveltyEnv, config: TrainConfig, learner: Learner,
     ready = learner.buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
 
     def body(learner, index):
-        updated, (loss, q_abs_max) = update_step(env, config, learner, targets, index)
+        updated, (loss, q_abs_max) = update_step(dqn, learner, targets, index)
         stats = (jnp.where(ready, loss, 0.0), jnp.where(ready, q_abs_max, 0.0))
         # Selecting per update rather than once after the scan: the same values, but XLA fuses the
         # update differently without it and the last bits change (the runs in docs/ would not reproduce).

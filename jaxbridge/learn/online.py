@@ -1,7 +1,7 @@
 """The online learning loop: per cycle, training episodes, double-DQN updates, greedy test evaluation.
 
 One jitted `cycle` runs a whole cycle for every seed: the seed axis is sharded over the devices and
-each device runs the same per-seed cycle on its seeds one after another (jaxbridge/devices.py says why
+each device runs the same per-seed cycle on its seeds one after another (learn/devices.py says why
 not a `vmap`: bit-identical numbers whatever the device count). Within a seed, its episodes form one
 batch of the meta-policy rollout (the planner's table lookups, the bridge's decisions and the env steps
 of every episode advance together). A host loop over cycles drives progress, logging and checkpoints;
@@ -9,9 +9,6 @@ nothing inside a cycle touches the host.
 """
 from __future__ import annotations
 
-import threading
-from dataclasses import dataclass
-from functools import lru_cache, partial
 from typing import Callable
 
 import jax
@@ -19,15 +16,13 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax import env_class
-from jaxbridge.learn.approaches import Approach, get_approach
-from jaxbridge.core.config import TrainConfig
-from jaxbridge.learn.devices import SeedMesh
-from jaxbridge.learn.dqn import Learner, epsilon, init_learner, learn, q_network
 from jaxbridge.core.meta_policy import rollout
-from jaxbridge.learn.q_bridge import QBridgeParams, QNetwork
+from jaxbridge.core.tasks import TaskArrays
+from jaxbridge.learn.devices import SeedMesh
+from jaxbridge.learn.dqn import Learner, epsilon, learn
+from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.learn.replay import add
-from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
+from jaxbridge.learn.setup import Setup
 from jaxbridge.learn.transitions import episode_transitions, for_buffer
 
 
@@ -47,74 +42,6 @@ class CycleMetrics:
     table_misses: jax.Array  # planner lookups answered by the host planner (train + test)
 
 
-@dataclass
-class Experiment:
-    """The static side of a run: config, tasks of every seed, the network and the bridge."""
-
-    config: TrainConfig
-    approach: Approach
-    train: TaskBatch  # seed-major: episodes_per_cycle copies of each seed's training task
-    test: TaskBatch  # seed-major: each seed's test tasks
-    net: QNetwork
-    train_bridge: Callable
-    test_bridge: Callable
-
-    @property
-    def env(self):
-        return self.test.env
-
-
-_TASKS_LOCK = threading.Lock()
-
-
-@lru_cache(maxsize=4)
-def _build_tasks(env: str, seeds: tuple[int, ...], episodes: int, train_steps: int,
-                 num_test_tasks: int) -> tuple[TaskBatch, TaskBatch]:
-    env_cls = env_class(env)
-    train_specs = [env_cls.train_task(s) for s in seeds for _ in range(episodes)]
-    train_owner = [s for s in seeds for _ in range(episodes)]
-    train = make_batch(env_cls, train_specs, train_owner, horizons=[train_steps] * len(train_specs))
-    return train, evaluation_batch(env_cls, list(seeds), num_test_tasks)
-
-
-def task_batches(config: TrainConfig) -> tuple[TaskBatch, TaskBatch]:
-    """The seeds' training batch (episodes_per_cycle copies of each seed's training task) and test batch.
-
-    Built once per process for equal settings and shared (read-only): every approach of an experiment
-    trains and tests on the same tasks, and their host-side build (planner tables, Doorknobs' roadmaps)
-    takes 7-19 s each time (docs/PERFORMANCE.md). The lock makes a second worker wait for the first's
-    build, not repeat it. The tasks' host planners (the plan-table fallback) are then shared too: their
-    caches fill from both workers' callbacks, with the same entries either would compute alone."""
-    with _TASKS_LOCK:
-        return _build_tasks(config.env, tuple(config.seeds), config.episodes_per_cycle, config.train_steps,
-                            config.num_test_tasks)
-
-
-def build_experiment(config: TrainConfig) -> Experiment:
-    train, test = task_batches(config)
-    net = q_network(config)
-    approach = get_approach(config.approach)
-    return Experiment(config, approach, train, test, net, approach.make_bridge(train.env, net, config.n_sample),
-                      approach.make_bridge(test.env, net, config.n_sample))
-
-
-def init_learners(experiment: Experiment) -> Learner:
-    """One learner per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""
-    return seed_learners(experiment.train.env, experiment.config)
-
-
-def training_env(config: TrainConfig):
-    """The env sized to the seeds' training tasks: the one the learners' shapes follow."""
-    env_cls = env_class(config.env)
-    return env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
-
-
-def seed_learners(train_env, config: TrainConfig) -> Learner:
-    """init_learners from the training env alone (what restoring a checkpoint needs as its template)."""
-    keys = jnp.stack([jax.random.key(s) for s in config.seeds])
-    return jax.vmap(partial(init_learner, train_env, config))(keys)
-
-
 def episode_params(learners: Learner, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:
     """Bridge parameters for a batch of episodes: each episode gets its seed's network (owner[i] is the
     seed index of episode i) and exploration rate eps[i] (zeros for the greedy bridge)."""
@@ -131,11 +58,11 @@ def _by_seed(tree, seeds: int):
     return jax.tree.map(lambda x: jnp.reshape(x, (seeds, -1) + x.shape[1:]), tree)
 
 
-def make_seed_cycle(experiment: Experiment) -> Callable:
-    """One seed's cycle: (learner, its training tasks, tables, horizons, its test tasks, tables,
-    horizons) -> (learner, CycleMetrics of scalars). The same computation for every seed."""
-    config, train, test = experiment.config, experiment.train, experiment.test
-    approach, controls = experiment.approach, experiment.approach.controls
+def make_seed_cycle(setup: Setup) -> Callable:
+    """One seed's cycle: (learner, its training TaskArrays, its test TaskArrays) -> (learner, CycleMetrics
+    of scalars). The same computation for every seed."""
+    config, approach, controls, train, test = setup.config, setup.approach, setup.approach.controls, setup.train, setup.test
+    train_bridge, test_bridge = setup.bridge(train.env), setup.bridge(test.env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train.env.num_skills
     # One insert per cycle, in order: the buffer finds a transition's next_features in the slot after it
@@ -144,16 +71,14 @@ def make_seed_cycle(experiment: Experiment) -> Callable:
         raise ValueError(f"{episodes} episodes x {config.train_steps} steps per cycle must fit the replay buffer "
                          f"({config.buffer_capacity} transitions)")
 
-    def seed_cycle(learner: Learner, train_tasks, train_tables, train_horizons, test_tasks, test_tables,
-                   test_horizons) -> tuple[Learner, CycleMetrics]:
+    def seed_cycle(learner: Learner, train_tasks: TaskArrays, test_tasks: TaskArrays) -> tuple[Learner, CycleMetrics]:
         k_next, k_train, k_learn, k_test = jax.random.split(learner.key, 4)
 
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
         eps = epsilon(config, learner.decisions)
         explore = QBridgeParams(q=_repeat(learner.params, episodes), epsilon=jnp.full(episodes, eps))
-        result, records = rollout(train.env, experiment.train_bridge, explore, train_tasks, train_tables,
-                                  train_horizons, jax.random.split(k_train, episodes), config.train_steps,
-                                  record=approach.learns, controls=controls)
+        result, records = rollout(train.env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
+                                  config.train_steps, record=approach.learns, controls=controls)
         decisions = result.bridge_decisions.sum()
 
         if approach.learns:
@@ -165,7 +90,7 @@ def make_seed_cycle(experiment: Experiment) -> Callable:
             learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)
 
             # 3. Double-DQN updates.
-            learner, loss, q_abs_max = learn(train.env, config, learner, decisions)
+            learner, loss, q_abs_max = learn(setup.dqn, learner, decisions)
         else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
             learner = learner.replace(decisions=learner.decisions + decisions)
             eps = jnp.float32(1.0 if approach.bridge == "random" else 0.0)
@@ -174,8 +99,8 @@ def make_seed_cycle(experiment: Experiment) -> Callable:
 
         # 4. Greedy evaluation on the seed's test tasks.
         greedy = QBridgeParams(q=_repeat(learner.params, num_tests), epsilon=jnp.zeros(num_tests, jnp.float32))
-        tested, _ = rollout(test.env, experiment.test_bridge, greedy, test_tasks, test_tables, test_horizons,
-                            jax.random.split(k_test, num_tests), test.max_steps, controls=controls)
+        tested, _ = rollout(test.env, test_bridge, greedy, test_tasks, jax.random.split(k_test, num_tests),
+                            test.max_steps, controls=controls)
 
         metrics = CycleMetrics(
             test_solve_rate=tested.success.mean(), train_success_rate=result.success.mean(),
@@ -193,28 +118,23 @@ class Cycle:
     Learners and metrics carry the placed seed axis of `seeds` (padded to a multiple of the device
     count and sharded over the devices: `seeds.place(init_learners(...))`, `seeds.unpad(...)`); with
     one device, or seeds divisible by the device count, that is just the seed axis. Each device runs
-    the per-seed cycle on its seeds one after another (jaxbridge/devices.py), so the numbers do not
+    the per-seed cycle on its seeds one after another (learn/devices.py), so the numbers do not
     depend on the device count."""
 
-    def __init__(self, experiment: Experiment, seeds: SeedMesh | None = None):
-        config = experiment.config
+    def __init__(self, setup: Setup, seeds: SeedMesh | None = None):
+        config = setup.config
         self.seeds = seeds or SeedMesh(config.num_seeds, block=config.seed_block)
         assert (self.seeds.num_seeds, self.seeds.block) == (config.num_seeds, config.seed_block)
         num_seeds = config.num_seeds
-        train, test = experiment.train, experiment.test
-        self._inputs = self.seeds.place(_by_seed((train.tasks, train.tables, train.horizons, test.tasks, test.tables,
-                                                  test.horizons), num_seeds))
+        self._inputs = self.seeds.place(_by_seed((setup.train.arrays, setup.test.arrays), num_seeds))
         self._real = self.seeds.real()
         # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical
         # fault during a cycle can still checkpoint the last good one.
         # out_shardings: the learners come back laid out as they went in. Left to XLA, a 1-device mesh
         # returns some leaves replicated (PartitionSpec()) instead of split over the seed axis: the same
         # memory, but a different jit cache key, so the second cycle compiled the whole program again.
-        self._run = jax.jit(self.seeds.map_seeds(make_seed_cycle(experiment)), out_shardings=self.seeds.sharding)
+        self._run = jax.jit(self.seeds.map_seeds(make_seed_cycle(setup)), out_shardings=self.seeds.sharding)
 
     def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
         return self._run(self._real, learners, *self._inputs)
 
-
-def make_cycle(experiment: Experiment, seeds: SeedMesh | None = None) -> Cycle:
-    return Cycle(experiment, seeds)

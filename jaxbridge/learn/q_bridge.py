@@ -7,6 +7,7 @@ epsilon-greedily with the random bridge.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import flax.linen as nn
@@ -16,7 +17,7 @@ import numpy as np
 from flax import struct
 
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, tree_where
-from jaxbridge.core.bridges import Bridge, random_bridge
+from jaxbridge.core.bridges import RandomBridge
 
 
 @struct.dataclass
@@ -176,15 +177,18 @@ class QBridgeParams:
     epsilon: jax.Array  # float32: exploration rate (0 = greedy)
 
 
-def make_q_bridge(env: NoveltyEnv, net: QNetwork, n_sample: int) -> Bridge:
-    """Epsilon-greedy Q bridge; with epsilon 0 it is the greedy bridge used at test time."""
-    skills = candidate_skills(env, n_sample)
-    explore_with = random_bridge(env)
+@dataclass(frozen=True)
+class QBridge:
+    """Epsilon-greedy Q bridge; with epsilon 0 it is the greedy bridge used at test time. Training explores
+    with the random bridge."""
 
-    def act(params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
+    env: NoveltyEnv
+    net: QNetwork
+    n_sample: int
+
+    def __call__(self, params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
         k_explore, k_random, k_greedy = jax.random.split(key, 3)
-        greedy, _ = best_candidate(env, net, params.q, obs.features, obs.num_ground, skills, k_greedy)
+        skills = candidate_skills(self.env, self.n_sample)
+        greedy, _ = best_candidate(self.env, self.net, params.q, obs.features, obs.num_ground, skills, k_greedy)
         explore = jax.random.uniform(k_explore) < params.epsilon
-        return tree_where(explore, explore_with(None, obs, k_random), greedy)
-
-    return act
+        return tree_where(explore, RandomBridge(self.env)(None, obs, k_random), greedy)

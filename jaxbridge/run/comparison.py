@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxbridge.learn.approaches import get_approach
+from jaxbridge.learn.approaches import Approach
 from jaxbridge.run.artifacts import REPORT_CYCLES, plot_curves
 from jaxbridge.utils.files import write_atomic
 from jaxbridge.utils.smoothing import smooth
@@ -32,14 +32,14 @@ def read_metrics(run_dir: Path, fields=("test_solve_rate", "train_success_rate")
     return out
 
 
-def summary_rows(metrics: dict[str, dict[str, np.ndarray]]) -> list[dict]:
-    """One row per approach ({name: read_metrics(...)}): mean/min/max test solve rate at the report
+def summary_rows(metrics: dict[Approach, dict[str, np.ndarray]]) -> list[dict]:
+    """One row per approach ({approach: read_metrics(...)}): mean/min/max test solve rate at the report
     cycles, smooth rewards."""
     rows = []
-    for name, m in metrics.items():
+    for approach, m in metrics.items():
         test, train = m["test_solve_rate"], m["train_success_rate"]
         cycles = test.shape[1]
-        row = {"approach": name, "label": get_approach(name).label, "seeds": test.shape[0], "cycles": cycles}
+        row = {"approach": approach.name, "label": approach.label, "seeds": test.shape[0], "cycles": cycles}
         for c in REPORT_CYCLES:
             if c <= cycles:
                 col = test[:, c - 1]
@@ -84,12 +84,11 @@ def results_markdown(env: str, rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_comparison(experiment_dir: Path, env: str, approaches: list[str]) -> list[dict]:
+def write_comparison(experiment_dir: Path, env: str, approaches: list[Approach]) -> list[dict]:
     """curves.png (one line per approach, band over seeds), results.md and results.csv."""
-    metrics = {name: read_metrics(experiment_dir / name) for name in approaches}
+    metrics = {a: read_metrics(experiment_dir / a.name) for a in approaches}
     rows = summary_rows(metrics)
-    curves = {get_approach(name).label: {"test": m["test_solve_rate"], "train": m["train_success_rate"]}
-              for name, m in metrics.items()}
+    curves = {a.label: {"test": m["test_solve_rate"], "train": m["train_success_rate"]} for a, m in metrics.items()}
     seeds = rows[0]["seeds"]
     write_atomic(experiment_dir / "curves.png", plot_curves(curves, f"{env}, {seeds} seeds per approach"))
     write_atomic(experiment_dir / "results.md", results_markdown(env, rows))

@@ -8,12 +8,14 @@ from typing import Any
 import jax
 import numpy as np
 
-from envs_jax import env_class
-from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import Controls, EpisodeResult, rollout
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
+from jaxbridge.learn.approaches import Approach
+from jaxbridge.learn.online import episode_params
+from jaxbridge.learn.setup import Setup
+from jaxbridge.run.runner import load_learners
 
 
 @dataclass
@@ -32,8 +34,8 @@ class SeedSummary:
 def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0,
                controls: Controls = Controls()) -> EpisodeResult:
     """One rollout of every task in the batch (bridge_params: None or batched over tasks)."""
-    result, _ = rollout(batch.env, bridge, bridge_params, batch.tasks, batch.tables, batch.horizons,
-                        jax.random.split(jax.random.key(seed), batch.size), batch.max_steps, controls=controls)
+    result, _ = rollout(batch.env, bridge, bridge_params, batch.arrays, jax.random.split(jax.random.key(seed), batch.size),
+                        batch.max_steps, controls=controls)
     return jax.tree.map(np.asarray, result)
 
 
@@ -80,13 +82,21 @@ def format_table(rows: list[SeedSummary]) -> str:
 class TrainedPolicy:
     """A run's latest checkpoint as greedy bridges (one per seed) that run on any batch of its env's tasks."""
 
-    config: TrainConfig
+    setup: Setup
     step: int  # the checkpoint's cycle
     learners: Any  # stacked over config.seeds
 
     @property
+    def config(self) -> TrainConfig:
+        return self.setup.config
+
+    @property
     def approach(self) -> Approach:
-        return get_approach(self.config.approach)
+        return self.setup.approach
+
+    @property
+    def env_cls(self) -> type:
+        return self.setup.env_cls
 
     def can_see(self, env) -> bool:
         """False where the approach's input cannot hold the env's tasks (the full-state ablations are
@@ -95,14 +105,11 @@ class TrainedPolicy:
 
     def on(self, batch: TaskBatch) -> tuple[Bridge, Any, Controls]:
         """(bridge, per-episode greedy params, controls) for the batch: each episode gets its seed's network."""
-        from jaxbridge.learn.dqn import q_network
-        from jaxbridge.learn.online import episode_params
-
         index = {seed: i for i, seed in enumerate(self.config.seeds)}
         if not set(batch.seeds.tolist()) <= index.keys():
             raise ValueError(f"the batch has tasks of seeds this run did not train ({self.config.seeds})")
         owner = np.array([index[s] for s in batch.seeds.tolist()])
-        bridge = self.approach.make_bridge(batch.env, q_network(self.config), self.config.n_sample)
+        bridge = self.setup.bridge(batch.env)
         greedy = episode_params(self.learners, owner, np.zeros(len(owner), np.float32))
         return bridge, greedy, self.approach.controls
 
@@ -113,10 +120,8 @@ class TrainedPolicy:
 
 def load_policy(run_dir) -> TrainedPolicy:
     """The greedy policy of a run directory's latest checkpoint (CheckpointError/ValueError if unusable)."""
-    from jaxbridge.run.runner import load_learners
-
-    config, learners, step = load_learners(Path(run_dir))
-    return TrainedPolicy(config, step, learners)
+    setup, learners, step = load_learners(Path(run_dir))
+    return TrainedPolicy(setup, step, learners)
 
 
 def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
@@ -124,7 +129,7 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
     `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed). Also returns the greedy
     policy it ran, (bridge, per-episode params, controls), so an episode can be re-run and drawn."""
     policy = load_policy(run_dir)
-    config, env_cls = policy.config, env_class(policy.config.env)
+    config, env_cls = policy.config, policy.setup.env_cls
     if sized_specs is None:
         batch = evaluation_batch(env_cls, config.seeds, config.num_test_tasks)
     else:
@@ -133,7 +138,8 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
             rng = np.random.default_rng(s + 20000)
             specs += [sized_specs(rng) for _ in range(num_tasks)]
             owners += [s] * num_tasks
-        batch = make_batch(env_cls, specs, owners)
+        sweep = env_cls.novelty_sweep  # its horizon rule scales with the tasks' size
+        batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None)
     bridge, greedy, controls = policy.on(batch)
     result = run_bridge(batch, bridge, greedy, seed, controls)
     return config, policy.step, batch, result, (bridge, greedy, controls)

@@ -5,7 +5,7 @@ The approaches run concurrently in worker threads: each one's cycles are one jit
 that releases the GIL, so on a 2-core CPU two approaches train in about the time of one (measured 2.2x
 for two 8-seed cycles in two threads vs one after the other). Each approach's numbers do not depend on
 what runs beside it. One progress bar counts the cycles of all of them. Each approach also shards its
-seeds over devices (jaxbridge/devices.py): the workers split `devices` between them, so that two
+seeds over devices (learn/devices.py): the workers split `devices` between them, so that two
 approaches on 2 cores run one device each rather than four device streams on two cores (Light Switch
 Door's six approaches: 373.6 s vs 402.7 s, docs/PERFORMANCE.md). Neither changes any number.
 """
@@ -21,10 +21,11 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from jaxbridge.run import artifacts
-from jaxbridge.run import checkpoint
-from jaxbridge.run import comparison
+from envs_jax import env_class
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.approaches import get_approach
+from jaxbridge.learn.setup import make_setup
+from jaxbridge.run import artifacts, checkpoint, comparison
 from jaxbridge.run.runner import Interrupted, prepare_run_dir, train
 
 EXPERIMENT_FILE = "experiment.json"
@@ -69,6 +70,7 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         artifacts.write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
             {"config": config.to_dict(), "approaches": approaches}, indent=2) + "\n")
     workers = workers or default_workers(approaches)
+    env_cls = env_class(config.env)  # resolved once for every approach
     bar = tqdm(total=config.cycles * len(approaches), unit="cycle", disable=not progress, dynamic_ncols=True,
                desc=f"{config.env} x{config.num_seeds} seeds, {len(approaches)} approaches")
     stop = threading.Event()
@@ -85,8 +87,8 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
             prepare_run_dir(run_dir, overwrite=True)
         share = device_shares.get()
         try:
-            return train(dataclasses.replace(config, approach=name), run_dir, resume=started, bar=bar, stop=stop,
-                         devices=share)
+            return train(make_setup(dataclasses.replace(config, approach=name), env_cls), run_dir, resume=started,
+                         bar=bar, stop=stop, devices=share)
         finally:
             device_shares.put(share)
 
@@ -119,4 +121,4 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         bar.close()
         done = [a for a in approaches if (experiment_dir / a / "metrics.csv").is_file()]
         if done:
-            comparison.write_comparison(experiment_dir, config.env, done)
+            comparison.write_comparison(experiment_dir, config.env, [get_approach(a) for a in done])

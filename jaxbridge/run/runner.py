@@ -14,12 +14,11 @@ import jax
 import numpy as np
 from tqdm import tqdm
 
-from jaxbridge.run import artifacts
-from jaxbridge.run import checkpoint
-from jaxbridge.learn.approaches import get_approach
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh, describe
-from jaxbridge.learn.online import CycleMetrics, build_experiment, init_learners, make_cycle, seed_learners, training_env
+from jaxbridge.learn.online import Cycle, CycleMetrics
+from jaxbridge.learn.setup import Setup, make_setup
+from jaxbridge.run import artifacts, checkpoint
 
 
 class Interrupted(Exception):
@@ -99,21 +98,20 @@ def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int)
             f"{seeds[int(np.argmax(bad))]}; stopped before any checkpoint")
 
 
-def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: bool = False,
+def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = False,
           fault_injection: Callable | None = None, bar: tqdm | None = None,
           stop: threading.Event | None = None, devices: list | None = None) -> dict:
-    """Run the cycles of `config` (continuing the latest checkpoint with `resume`), writing the run
+    """Run the cycles of `setup.config` (continuing the latest checkpoint with `resume`), writing the run
     files and checkpoints into `run_dir`. `fault_injection(cycle, learners) -> learners` lets tests
     corrupt the state before a cycle (seed i is slot i of the leading axis). `bar`: a progress bar
     shared with other runs (else its own). `stop`: when set (by another thread), checkpoint the last
     completed cycle and raise Interrupted. `devices`: the seed axis is sharded over them (default: the
     first local device); the numbers do not depend on them, and a run may resume on others."""
-    start = time.perf_counter()
+    start, config = time.perf_counter(), setup.config
     if resume:
         check_checkpoint_belongs(config, run_dir)
-    experiment = build_experiment(config)
     seeds = SeedMesh(config.num_seeds, tuple(devices or jax.local_devices()[:1]), config.seed_block)
-    learners = init_learners(experiment)
+    learners = setup.init_learners()
     history: list[CycleMetrics] = []
     elapsed_before = 0.0
     if resume:
@@ -121,7 +119,7 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
         history, elapsed_before = _history(record), float(record["elapsed_s"])
     else:
         artifacts.write_atomic(run_dir / "config.json", json.dumps(config.to_dict(), indent=2) + "\n")
-    cycle = make_cycle(experiment, seeds)
+    cycle = Cycle(setup, seeds)
     learners = seeds.place(learners)  # checkpoints hold the unpadded state on one device
     last_saved = len(history)
     elapsed = lambda: elapsed_before + time.perf_counter() - start
@@ -167,15 +165,16 @@ def train(config: TrainConfig, run_dir: Path, progress: bool = True, resume: boo
             bar.close()
         if done[1]:  # the files always describe the cycles completed so far
             artifacts.write_run_files(run_dir, config.to_dict(), done[1], config.seeds, elapsed(),
-                                      label=get_approach(config.approach).label, devices=describe(seeds.devices))
+                                      label=setup.approach.label, devices=describe(seeds.devices))
     return artifacts.summary(done[1], config.seeds, elapsed(), describe(seeds.devices))
 
 
-def load_learners(run_dir: Path) -> tuple[TrainConfig, object, int]:
-    """A run's config and latest learner state (with its cycle). Only the training env is built: the
-    template the checkpoint is restored into needs its shapes, not the tasks."""
+def load_learners(run_dir: Path) -> tuple[Setup, object, int]:
+    """A run's setup and latest learner state (with its cycle). No task is compiled: the template the
+    checkpoint is restored into needs the training env's shapes, not the tasks."""
     config = load_config(run_dir)
     check_checkpoint_belongs(config, run_dir)
-    learners, record, step = checkpoint.restore(run_dir / "checkpoints", seed_learners(training_env(config), config))
-    return config, learners, step
+    setup = make_setup(config)
+    learners, record, step = checkpoint.restore(run_dir / "checkpoints", setup.init_learners())
+    return setup, learners, step
 

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from envs_jax import env_class
 from envs_jax.base import NoveltyEnv
 from jaxbridge.run.evaluate import TrainedPolicy
 from jaxbridge.core.tasks import TaskBatch, make_batch
@@ -53,10 +52,12 @@ def sweep_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int]) -> Tas
 def evaluate_sweep(policies: dict[str, TrainedPolicy], tasks_per_count: int = 10, sweep_seed: int = 0,
                    rollout_seed: int = 0, progress=lambda label: None) -> SweepResult:
     """Each policy (line label -> policy, all of one env) greedily on the sweep's tasks."""
-    envs = {p.config.env for p in policies.values()}
+    envs = {p.env_cls for p in policies.values()}
     if len(envs) != 1:
-        raise ValueError(f"a sweep compares runs of one env, got {', '.join(sorted(envs))}")
-    env_cls = env_class(envs.pop())
+        raise ValueError(f"a sweep compares runs of one env, got {', '.join(sorted(e.name for e in envs))}")
+    env_cls = envs.pop()
+    if env_cls.novelty_sweep is None:
+        raise ValueError(f"env {env_cls.name} states no generalisation sweep (NoveltyEnv.novelty_sweep)")
     specs, counts = sweep_tasks(env_cls, tasks_per_count, sweep_seed)
     sweep = env_cls.novelty_sweep
     batches: dict = {}  # (seeds, visible counts) -> batch: approaches of one experiment share it

@@ -36,11 +36,10 @@ def drawer_for(env: NoveltyEnv) -> Drawer:
 
 # ---- recording ---------------------------------------------------------------------------------
 @partial(jax.jit, static_argnames=("env", "bridge", "drawer", "max_steps", "controls"))
-def _recorded_rollout(env, bridge, drawer, params, tasks, tables, horizons, keys, max_steps, controls):
+def _recorded_rollout(env, bridge, drawer, params, batch, keys, max_steps, controls):
     """rollout(record=True), keeping of each recorded state only its snapshot and details (XLA then drops
     the rest), and of each step the ground skill it ran."""
-    result, records = rollout(env, bridge, params, tasks, tables, horizons, keys, max_steps, record=True,
-                              controls=controls)
+    result, records = rollout(env, bridge, params, batch, keys, max_steps, record=True, controls=controls)
     per_state = lambda state: (*drawer.snapshot(env, state), drawer.details(env, state))
     xy, door_open, details = jax.vmap(jax.vmap(per_state))(records.env_state)  # [T, B, ...]
     per_step = (records.actor, records.skill, records.slot, records.param, records.decided)
@@ -60,8 +59,7 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
     # its first max_steps steps do not depend on how many are drawn (partitionable threefry); the check
     # against `expected` below would catch it if they did.
     result, (actor, skill, slot, param, decided), (xy, door_open, details) = jax.tree.map(np.asarray, _recorded_rollout(
-        batch.env, bridge, drawer_for(batch.env), params, take(batch.tasks), take(batch.tables),
-        take(batch.horizons), keys, batch.max_steps + 1, controls))
+        batch.env, bridge, drawer_for(batch.env), params, take(batch.arrays), keys, batch.max_steps + 1, controls))
     if expected is not None:
         for field in ("success", "steps", "planner_calls", "bridge_decisions", "stuck_events"):
             if not np.array_equal(getattr(result, field), np.asarray(getattr(expected, field))[idx]):

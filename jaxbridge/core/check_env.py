@@ -1,0 +1,191 @@
+"""`check_env`: does an env keep the contract of envs_jax/base.py?
+
+It builds tasks and checks, in order: the class attributes; the host side (task specs, capacities, task
+arrays); the planner's model (it grounds, its plan tables build, the abstraction of the initial state is
+the model's initial state); every device function (pure: jit, vmap and a second call give the same
+values; the declared shapes and dtypes); and, when the env has an oracle bridge, that it solves its own
+test tasks through the meta-policy. The first broken promise raises `EnvContractError`, one line naming
+the method and what was expected.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import chex
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from envs_jax.base import NoveltyEnv, SkillCall, SkillSpec
+from jaxbridge.core.bridges import OracleBridge
+from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.tasks import evaluation_batch
+from planner.strips import Domain, Problem
+from planner.tables import compile_task, pack_atoms
+
+
+class EnvContractError(ValueError):
+    """An env breaks the contract; the message names the method and what was expected."""
+
+
+def check_env(env_or_class: NoveltyEnv | type[NoveltyEnv], seed: int = 0, num_test_tasks: int = 2,
+              oracle: bool = True) -> type[NoveltyEnv]:
+    """Check an env class (or an instance's class) against the contract; returns the class.
+
+    `seed` and `num_test_tasks` pick the tasks checked; `oracle=False` skips the oracle's rollout."""
+    cls = env_or_class if isinstance(env_or_class, type) else type(env_or_class)
+    _check_class(cls)
+    train_spec, test_specs = _check_specs(cls, seed, num_test_tasks)
+    env = cls.for_tasks([train_spec, *test_specs])
+    _expect(isinstance(env, cls), f"{cls.__name__}.for_tasks", f"an instance of {cls.__name__}", type(env).__name__)
+    _expect(env == cls.for_tasks([train_spec, *test_specs]) and hash(env) == hash(cls.for_tasks([train_spec, *test_specs])),
+            f"{cls.__name__}.for_tasks", "equal, hashable envs for equal specs (a frozen dataclass)", "unequal ones")
+    for spec in (train_spec, *test_specs):
+        _check_planner(env, spec)
+    _check_device(env, [env.task_arrays(s) for s in (train_spec, *test_specs[:1])])
+    if oracle and env.has_oracle:
+        _check_oracle(cls, seed, num_test_tasks)
+    return cls
+
+
+def _expect(ok: bool, where: str, expected: str, got: Any) -> None:
+    if not ok:
+        raise EnvContractError(f"{where}: expected {expected}, got {got}")
+
+
+def _calls(where: str, fn: Callable, *args) -> Any:
+    """fn(*args), with any exception reported as a contract error of `where`."""
+    try:
+        return fn(*args)
+    except EnvContractError:
+        raise
+    except Exception as err:  # noqa: BLE001 -- whatever an env raises is reported, in one line
+        raise EnvContractError(f"{where} raised {type(err).__name__}: {err}") from None
+
+
+# ---- the class ---------------------------------------------------------------------------------------
+def _check_class(cls: type) -> None:
+    _expect(isinstance(cls, type) and issubclass(cls, NoveltyEnv), "env", "a subclass of envs_jax.NoveltyEnv", cls)
+    name = cls.__name__
+    missing = sorted(getattr(cls, "__abstractmethods__", ()))
+    _expect(not missing, name, "every abstract method of NoveltyEnv implemented", f"missing {', '.join(missing)}")
+    for attr, kind in (("name", str), ("action_dim", int), ("num_features", int), ("full_state_size", int)):
+        value = getattr(cls, attr, None)
+        _expect(isinstance(value, kind) and (kind is str or value > 0) and bool(value), f"{name}.{attr}",
+                f"a {'non-empty string' if kind is str else 'positive int'}", repr(value))
+    skills = getattr(cls, "skills", None)
+    _expect(isinstance(skills, tuple) and skills and all(isinstance(s, SkillSpec) for s in skills),
+            f"{name}.skills", "a non-empty tuple of SkillSpec", repr(skills))
+    for s in skills:
+        _expect(s.param_low <= s.param_high, f"{name}.skills[{s.name}]", "param_low <= param_high",
+                f"{s.param_low} > {s.param_high}")
+    domain = getattr(cls, "domain", None)
+    _expect(isinstance(domain, Domain), f"{name}.domain", "a planner.Domain", type(domain).__name__)
+    names = {s.name for s in skills}
+    for op in domain.operators:
+        _expect(op.skill in names, f"{name}.domain operator {op.name}", f"a skill among {sorted(names)}", repr(op.skill))
+
+
+def _check_specs(cls: type[NoveltyEnv], seed: int, num_test_tasks: int) -> tuple[Any, list]:
+    name = cls.__name__
+    train_spec = _calls(f"{name}.train_task", cls.train_task, seed)
+    tests = _calls(f"{name}.test_tasks", cls.test_tasks, seed, num_test_tasks)
+    _expect(isinstance(tests, list) and len(tests) == num_test_tasks, f"{name}.test_tasks({seed}, {num_test_tasks})",
+            f"a list of {num_test_tasks} specs", repr(tests)[:80])
+    _expect(train_spec == cls.train_task(seed) and tests == cls.test_tasks(seed, num_test_tasks),
+            f"{name}.train_task/test_tasks", "the same specs for the same seed", "different ones")
+    for spec in (train_spec, *tests):
+        _calls(f"{name} task spec {spec!r:.60}: hash", hash, spec)
+        for attr in ("horizon", "min_steps"):
+            value = getattr(spec, attr, None)
+            _expect(isinstance(value, (int, np.integer)) and value > 0, f"{name} task spec .{attr}",
+                    "a positive int", repr(value))
+        _expect(isinstance(_calls(f"{name} task spec .describe", spec.describe), str), f"{name} task spec .describe()",
+                "a string", "something else")
+    return train_spec, tests
+
+
+# ---- the planner's model -----------------------------------------------------------------------------
+def _check_planner(env: NoveltyEnv, spec: Any) -> None:
+    name = type(env).__name__
+    problem = _calls(f"{name}.planner_problem", env.planner_problem, spec)
+    _expect(isinstance(problem, Problem), f"{name}.planner_problem", "a planner.Problem", type(problem).__name__)
+    for atom in sorted(problem.init | problem.goal):
+        index = _calls(f"{name}.atom_index({atom})", env.atom_index, atom)
+        _expect(isinstance(index, (int, np.integer)) and 0 <= index < env.num_atoms, f"{name}.atom_index({atom})",
+                f"an int in [0, num_atoms = {env.num_atoms})", repr(index))
+    compiled = _calls(f"{name}: grounding the planner's model and building its plan table", compile_task, env, spec)
+    initial = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec)))
+    packed = np.asarray(pack_atoms(_calls(f"{name}.abstract", env.abstract, initial)))
+    expected = np.asarray(compiled.table.state_keys[0])  # row 0: the model's initial state
+    _expect(np.array_equal(packed, expected), f"{name}.abstract(reset(task))",
+            "the atoms of planner_problem(spec).init (abstraction and model disagree)", "other atoms")
+
+
+# ---- device functions ----------------------------------------------------------------------------------
+def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
+    """Shapes, dtypes and purity of every device function, on one task and on a batch of two."""
+    name = type(env).__name__
+    tasks = jax.tree.map(lambda *xs: jnp.asarray(np.stack(xs)), *task_arrays)
+    task = jax.tree.map(lambda x: x[0], tasks)
+    state = _calls(f"{name}.reset", env.reset, task)
+    _same(f"{name}.reset", state, jax.jit(env.reset)(task), env.reset(task))
+    vec = _shape(f"{name}.state_vector", env.state_vector(state), jnp.float32)
+    zero = jnp.zeros(env.action_dim, jnp.float32)
+    stepped = _calls(f"{name}.step", env.step, state, zero)
+    _calls(f"{name}.step: the state's structure, shapes and dtypes", chex.assert_trees_all_equal_shapes_and_dtypes,
+           stepped, state)
+    skill_ids, slots = jnp.arange(env.num_skills, dtype=jnp.int32), jnp.zeros(env.num_skills, jnp.int32)
+    calls = SkillCall(skill=skill_ids, slot=slots, param=jnp.zeros(env.num_skills, jnp.float32),
+                      running=jnp.ones(env.num_skills, bool), steps=jnp.zeros(env.num_skills, jnp.int32))
+    one_call = jax.tree.map(lambda x: x[0], calls)
+    functions = {  # name -> (function of one state, expected shape, dtype)
+        "abstract": (env.abstract, (env.num_atoms,), jnp.bool_),
+        "goal_reached": (env.goal_reached, (), jnp.bool_),
+        "state_vector": (env.state_vector, vec.shape, jnp.float32),
+        "features": (lambda s: env.features(s, s), (env.num_features,), jnp.float32),
+        "full_state": (env.full_state, (env.full_state_size,), jnp.float32),
+        "skill_action": (lambda s: jax.vmap(env.skill_action, (None, 0))(s, calls), (env.num_skills, env.action_dim),
+                         jnp.float32),
+        "skill_done": (lambda s: jax.vmap(env.skill_done, (None, None, 0))(s, env.step(s, zero), calls),
+                       (env.num_skills,), jnp.bool_),
+        "skill_initiable": (lambda s: env.skill_initiable(s, skill_ids, slots), (env.num_skills,), jnp.bool_),
+        "step": (lambda s: env.state_vector(env.step(s, env.skill_action(s, one_call))), vec.shape, jnp.float32),
+    }
+    states = jax.vmap(env.reset)(tasks)
+    for method, (fn, shape, dtype) in functions.items():
+        where = f"{name}.{method}"
+        value = _shape(where, _calls(where, fn, state), dtype, shape)
+        _same(where, value, jax.jit(fn)(state), fn(state))
+        batched = _calls(f"{where} under vmap", jax.vmap(fn), states)
+        _shape(f"{where} under vmap", batched, dtype, (len(task_arrays),) + shape)
+        _same(f"{where} under vmap", batched[0], value)
+
+
+def _shape(where: str, value: Any, dtype, shape: tuple | None = None) -> jax.Array:
+    shown = f"{getattr(value, 'dtype', type(value).__name__)}{list(getattr(value, 'shape', ()))}"
+    want = f"{jnp.dtype(dtype).name}{list(shape) if shape is not None else '[D]'}"
+    ok = isinstance(value, jax.Array) and value.dtype == dtype and (shape is None and value.ndim == 1 or value.shape == shape)
+    _expect(ok, where, want, shown)
+    return value
+
+
+def _same(where: str, *values: Any) -> None:
+    """Equal values from equal inputs: no hidden state, no randomness without a key."""
+    try:
+        for other in values[1:]:
+            chex.assert_trees_all_close(values[0], other, rtol=1e-6, atol=1e-6)
+    except AssertionError:
+        raise EnvContractError(f"{where}: expected the same values from the same inputs (jit, vmap, a second call), "
+                               f"got different ones (hidden state or randomness?)") from None
+
+
+# ---- the oracle ----------------------------------------------------------------------------------------
+def _check_oracle(cls: type[NoveltyEnv], seed: int, num_test_tasks: int) -> None:
+    batch = evaluation_batch(cls, [seed], num_test_tasks)
+    where = f"{cls.__name__}.oracle_bridge"
+    result, _ = _calls(where, lambda: rollout(batch.env, OracleBridge(batch.env), None, batch.arrays,
+                                              jax.random.split(jax.random.key(seed), batch.size), batch.max_steps))
+    solved = np.asarray(result.success)
+    _expect(solved.all(), where, f"every test task of seed {seed} solved within its horizon",
+            f"{int(solved.sum())} of {solved.size} (unsolved: tasks {np.flatnonzero(~solved).tolist()})")

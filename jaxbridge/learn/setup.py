@@ -1,0 +1,83 @@
+"""A run's config with everything it names resolved once (`Setup`): the env class, the training and test
+envs, the approach, the Q-network and the optimiser, and (built on first use) the seeds' task batches."""
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from functools import cached_property, lru_cache, partial
+
+import jax
+import jax.numpy as jnp
+
+from envs_jax import NoveltyEnv, env_class
+from jaxbridge.core.bridges import Bridge
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
+from jaxbridge.learn.approaches import Approach, get_approach
+from jaxbridge.learn.dqn import DQN, Learner, init_learner, make_dqn
+
+
+@dataclass(frozen=True)
+class Setup:
+    """The static side of a run, resolved from its config: nothing below looks a name up again."""
+
+    config: TrainConfig
+    env_cls: type[NoveltyEnv]
+    approach: Approach
+    train_env: NoveltyEnv  # sized to the seeds' training tasks: the learners' shapes follow it
+    test_env: NoveltyEnv  # sized to the seeds' test tasks
+    dqn: DQN  # network, optimiser and observation width, on the training env
+
+    @cached_property
+    def train(self) -> TaskBatch:
+        """episodes_per_cycle copies of each seed's training task, seed-major (built on first use)."""
+        return task_batches(self)[0]
+
+    @cached_property
+    def test(self) -> TaskBatch:
+        """Each seed's test tasks, seed-major (built on first use)."""
+        return task_batches(self)[1]
+
+    def bridge(self, env: NoveltyEnv) -> Bridge:
+        """The approach's bridge on `env` (equal arguments give equal bridges: one compilation)."""
+        return self.approach.make_bridge(env, self.dqn.net, self.config.n_sample)
+
+    def init_learners(self) -> Learner:
+        """One learner per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""
+        keys = jnp.stack([jax.random.key(s) for s in self.config.seeds])
+        return jax.vmap(partial(init_learner, self.dqn))(keys)
+
+
+def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> Setup:
+    """Resolve `config` (its env by name unless `env_cls` is given, its approach)."""
+    env_cls = env_cls or env_class(config.env)
+    approach = get_approach(config.approach)
+    train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
+    test_env = env_cls.for_tasks([t for s in config.seeds for t in env_cls.test_tasks(s, config.num_test_tasks)])
+    dqn = make_dqn(config, train_env, approach.observation_size(train_env))
+    return Setup(config, env_cls, approach, train_env, test_env, dqn)
+
+
+_TASKS_LOCK = threading.Lock()
+
+
+@lru_cache(maxsize=4)
+def _build_tasks(env_cls: type[NoveltyEnv], seeds: tuple[int, ...], episodes: int, train_steps: int,
+                 num_test_tasks: int) -> tuple[TaskBatch, TaskBatch]:
+    train_specs = [env_cls.train_task(s) for s in seeds for _ in range(episodes)]
+    train_owner = [s for s in seeds for _ in range(episodes)]
+    train = make_batch(env_cls, train_specs, train_owner, horizons=[train_steps] * len(train_specs))
+    return train, evaluation_batch(env_cls, list(seeds), num_test_tasks)
+
+
+def task_batches(setup: Setup) -> tuple[TaskBatch, TaskBatch]:
+    """The seeds' training batch (episodes_per_cycle copies of each seed's training task) and test batch.
+
+    Built once per process for equal settings and shared read-only: every approach of an experiment
+    trains and tests on the same tasks, and their host-side build (plan tables, roadmaps) takes seconds.
+    The lock makes a second worker wait for the first's build rather than repeat it; the tasks' host
+    planners are then shared too, their caches filling with the entries either worker would compute."""
+    config = setup.config
+    with _TASKS_LOCK:
+        return _build_tasks(setup.env_cls, tuple(config.seeds), config.episodes_per_cycle, config.train_steps,
+                            config.num_test_tasks)

@@ -1,0 +1,36 @@
+"""Envs that break the contract in one way each (tests/test_env_contract.py, also loaded by train.py)."""
+import jax.numpy as jnp
+
+from examples.locked_box import LockedBox
+
+
+class ShortFeatures(LockedBox):
+    def features(self, state, stuck_state):
+        return super().features(state, stuck_state)[:2]
+
+
+class CountingStep(LockedBox):
+    """step() depends on how often it was traced: hidden Python state."""
+    calls = [0]
+
+    def step(self, state, action):
+        CountingStep.calls[0] += 1
+        return super().step(state, action).replace(robot_x=state.robot_x + 0.01 * CountingStep.calls[0])
+
+
+class WrongAbstraction(LockedBox):
+    def abstract(self, state):
+        return ~super().abstract(state)
+
+
+class ClumsyOracle(LockedBox):
+    def oracle_bridge(self, params, obs, key):
+        return super().oracle_bridge(params, obs, key).replace(param=jnp.float32(0.9))  # misses the grip
+
+
+class FloatGoal(LockedBox):
+    def goal_reached(self, state):
+        return state.box_open.astype(jnp.float32)
+
+
+NotAnEnv = object

@@ -1,0 +1,51 @@
+"""The house's rules: every import points down a floor, and no module grows past ~400 lines."""
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+# Floors, lowest first: a module may import its own floor's modules and those of the floors below it.
+FLOORS = ("planner", "envs_jax", "jaxbridge.utils", "jaxbridge.core", "jaxbridge.learn", "jaxbridge.run",
+          "jaxbridge.viz", "jaxbridge.commands")
+PACKAGES = ("planner", "envs_jax", "jaxbridge")
+MAX_LINES = 420
+
+
+def floor(module: str) -> int | None:
+    matches = [i for i, name in enumerate(FLOORS) if module == name or module.startswith(name + ".")]
+    return max(matches) if matches else None
+
+
+def modules():
+    for package in PACKAGES:
+        for path in sorted((ROOT / package).rglob("*.py")):
+            name = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+            yield name.removesuffix(".__init__"), path
+
+
+def imported(path: Path) -> set[str]:
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names |= {f"{node.module}.{a.name}" for a in node.names} | {node.module}
+    return names
+
+
+def test_every_import_points_down_a_floor():
+    upward = []
+    for name, path in modules():
+        if path.name == "__init__.py" and floor(name) in (None, FLOORS.index("envs_jax")):
+            continue  # a package's front door re-exports what lies below it
+        mine = floor(name)
+        for target in imported(path):
+            theirs = floor(target)
+            if theirs is not None and mine is not None and theirs > mine:
+                upward.append(f"{name} imports {target}")
+    assert not upward, upward
+
+
+def test_no_module_is_longer_than_about_400_lines():
+    long = {name: n for name, path in modules() if (n := len(path.read_text().splitlines())) > MAX_LINES}
+    long |= {p.name: n for p in (ROOT / "train.py", ROOT / "eval.py") if (n := len(p.read_text().splitlines())) > 150}
+    assert not long, long
