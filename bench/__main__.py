@@ -16,7 +16,7 @@ each (so that its peak memory is its own):
   * peak resident memory of the process (ru_maxrss) and its growth over the process after `import jax`;
     on a GPU also the device's peak bytes in use.
 The persistent compilation cache is off here, so every compile figure is a cold compile (and the cycle
-is never cached anyway: it holds a host callback, see jaxbridge/compile_cache.py).
+is never cached anyway: it holds a host callback, see jaxbridge/utils/compile_cache.py).
 """
 from __future__ import annotations
 

@@ -1,9 +1,13 @@
 """The planner/bridge meta-policy (Algorithm 1): stuck detection, hand-over, CallPlanner, batching."""
+from functools import partial
+
+import chex
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from envs_jax import BridgeObs
 from envs_jax.light_switch_door import env as lsd
 from envs_jax.light_switch_door.env import LightSwitchDoor
 from jaxbridge.core.bridges import make_bridge
@@ -113,7 +117,7 @@ def test_rollouts_are_deterministic_per_key(batch):
     a, _ = run(batch, "random", seed=5)
     b, _ = run(batch, "random", seed=5)
     c, _ = run(batch, "random", seed=6)
-    assert all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)))
+    chex.assert_trees_all_equal(a, b)
     assert not np.array_equal(a.bridge_decisions, c.bridge_decisions)
 
 
@@ -125,3 +129,23 @@ def test_hashed_choice_is_uniform_over_set_entries():
     assert values.tolist() == [3, 7, 8, 20, 39]
     assert np.all(np.abs(counts / len(picks) - 0.2) < 0.02)
     assert int(hashed_choice(jnp.zeros(40, bool), bits[0])) == 0
+
+
+def test_equal_bridges_are_one_static_argument_and_compile_once(batch):
+    """Bridges are frozen dataclasses: a new but equal bridge (or env) reuses the compiled program."""
+    from dataclasses import replace
+
+    from jaxbridge.core.bridges import RandomBridge
+
+    @partial(jax.jit, static_argnames="bridge")
+    @chex.assert_max_traces(n=1)
+    def decide(bridge, obs, key):
+        return bridge(None, obs, key)
+
+    obs = BridgeObs(features=jnp.zeros(batch.env.num_features), num_ground=jnp.ones(batch.env.num_skills + 1, jnp.int32))
+    chex.clear_trace_counter()
+    first = decide(RandomBridge(batch.env), obs, jax.random.key(0))
+    again = decide(RandomBridge(replace(batch.env)), obs, jax.random.key(0))  # equal, not the same objects
+    chex.assert_trees_all_equal(first, again)
+    with pytest.raises(AssertionError, match="is traced > 1 times"):  # a bridge of another env does compile
+        decide(RandomBridge(replace(batch.env, max_cells=batch.env.max_cells + 1)), obs, jax.random.key(0))

@@ -102,16 +102,7 @@ class Coffee(NoveltyEnv):
                                  world.sweep_horizon)
     test_tasks = staticmethod(world.test_tasks)
     train_steps = TRAIN_STEPS
-    # 250 minibatch updates per cycle instead of 1000 (docs/RESULTS.md, Coffee; 8-seed 100-cycle sweeps of
-    # seeds 0-7 and 8-15). A cycle yields only 10-82 bridge decisions (median 35), and 1000 updates x batch
-    # 256 refit that small buffer dozens of times per cycle: over 16 seeds the paper's settings learned more slowly
-    # (mean test solve rate 0.84 at cycle 10 against 0.96) and drifted more late (lowest mean from cycle 50
-    # 0.93 against 0.98; seed 6 fell to 0-0.2 for cycles 43-67), at 1.6x the time. The authors' +0.5
-    # CallPlanner bonus and clip_bootstrap were measured too and are left off: with 1000 updates the bonus
-    # let 4 of seeds 8-15 collapse for 5-45 cycles, on top of 250 updates it made seed 13 drift (42
-    # seed-cycles below 0.9 after cycle 50 on seeds 8-15, against 6), clip_bootstrap gained nothing, and
-    # neither separates the one near-tie left (CallPlanner at the jug top, where the planner twists with
-    # its uniform sampler, against TwistJug then CallPlanner): both end in the same CallPlanner reward.
+    # Fewer updates: a cycle yields few bridge decisions, and 1000 updates overfit them (docs/RESULTS.md, Coffee).
     train_defaults: ClassVar[dict] = {"updates_per_cycle": 250}
 
     @property

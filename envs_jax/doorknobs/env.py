@@ -135,21 +135,10 @@ class Doorknobs(NoveltyEnv):
     train_steps = TRAIN_STEPS
     novelty_sweep = NoveltySweep("doors to the goal", f"on {SWEEP_MAP_SIZE}x{SWEEP_MAP_SIZE} maps, every door closed",
                                  SWEEP_DOORS, sweep_task, sweep_horizon)
-    # Measured on seeds 0-7 (docs/RESULTS.md, Doorknobs):
-    # - call_planner_bonus: the authors' +0.5 when CallPlanner's transition reaches the goal. On a training
-    #   map with one door, walking through the opened door reaches the goal room as surely as handing back
-    #   to the planner; without it the two tie at Q = 1, and the bridge that walks through doors itself is
-    #   lost on the larger test maps.
-    # - updates_per_cycle 150: Doorknobs makes only ~50 bridge decisions per cycle, so 1000 minibatches of
-    #   256 refit a buffer of a few thousand transitions dozens of times per cycle; the Q-function then
-    #   drifts where the one training map gave no data (knob offsets unlike its doorways), and greedy
-    #   bridges start turning already-open knobs forever instead of calling the planner.
-    # - clip_bootstrap, q_ensemble 2: the argmax over 100 sampled knob turns picks the network's upward
-    #   errors, which the targets fed back (|Q| reached 1.8 > the achievable 1.5); clipping the bootstrap
-    #   and taking the minimum of two networks keep every seed at 1.0 from cycle ~40 to 100.
+    # Chosen on the tuning seeds (docs/RESULTS.md, Doorknobs): the CallPlanner bonus breaks the tie with walking
+    # through the opened door; fewer updates and the clipped, twin-network targets stop the Q drift.
     train_defaults = {"call_planner_bonus": 0.5, "updates_per_cycle": 150, "clip_bootstrap": True, "q_ensemble": 2}
-    # Every object padded to 5x5 makes a 2027-value full state: each full-state ablation takes ~20 minutes
-    # on 2 cores (ours ~2), so train.py leaves them out unless asked (--approaches all; docs/PERFORMANCE.md).
+    # The full-state ablations (2027 inputs) run only when asked (docs/PERFORMANCE.md).
     default_approaches = ("ours", "no_callplanner", "random", "pure_planning")
     why_not_all = ("their full state is 2027 values wide: all six take ~25 minutes on 2 cores, these four ~4, "
                    "and ~7 GB of memory each")

@@ -1,4 +1,5 @@
-"""Hyperparameters of a training run; defaults are the paper's (reference/method.md §7)."""
+"""Hyperparameters of a training run. The defaults are ours; each field says where the paper or the authors'
+code (reference/method.md §7) differ, and docs/DESIGN.md lists every departure."""
 from __future__ import annotations
 
 import dataclasses
@@ -12,12 +13,12 @@ class TrainConfig:
     env: str = "light_switch_door"
     """Environment name."""
     approach: str = "ours"
-    """Which of the paper's approaches (jaxbridge/approaches.py): ours, no_feature_selection,
+    """Which of the paper's approaches (jaxbridge/learn/approaches.py): ours, no_feature_selection,
     no_callplanner, random, pure_planning, maple_q."""
     num_seeds: int = 8
     """Independent seeds, trained together in one vectorised computation."""
     seed_block: int = 1
-    """Seeds `vmap`ped together on a device (jaxbridge/devices.py). 1: one seed after another, so a
+    """Seeds `vmap`ped together on a device (jaxbridge/learn/devices.py). 1: one seed after another, so a
     seed's numbers depend on nothing else; larger blocks fill a GPU, and then the numbers depend on
     the block width (never on the device count)."""
     first_seed: int = 0
@@ -31,12 +32,13 @@ class TrainConfig:
     num_test_tasks: int = 10
     """Test tasks per seed, evaluated greedily after every cycle (the paper: 10)."""
     updates_per_cycle: int = 1000
-    """Double-DQN minibatch updates after each cycle's episodes (see docs/DESIGN.md for the choice)."""
+    """Double-DQN minibatch updates after each cycle's episodes (the authors: up to 100,000 iterations with
+    early stopping, about 5k-21k per cycle; see docs/DESIGN.md)."""
     batch_size: int = 256
     """Minibatch size (the paper: 64; 256 learns more reliably at the same number of updates, see
     docs/RESULTS.md)."""
     learning_rate: float = 1e-3
-    """Adam step size (the paper: 1e-3)."""
+    """Adam step size (the paper: 1e-3; the authors reset Adam every cycle, ours keeps its state)."""
     gamma: float = 0.8
     """Discount per bridge decision (the paper: 0.8)."""
     grad_clip: float = 5.0
@@ -44,14 +46,15 @@ class TrainConfig:
     polyak_tau: float = 0.0025
     """Target-network soft update step (the paper: 0.0025)."""
     polyak_per: str = "update"
-    """When the target takes a polyak step: after every minibatch "update", or per training bridge
+    """When the target takes a polyak step: after every minibatch "update" (ours), or per training bridge
     "decision" (the authors' code). See docs/RESULTS.md for the comparison."""
     hidden_sizes: tuple[int, ...] = (32, 32)
     """Q-network hidden layers (the paper: [32, 32])."""
     q_ensemble: int = 1
     """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     n_sample: int = 100
-    """Parameter samples per skill in the greedy argmax (the paper: 100 for Light Switch Door)."""
+    """Parameter samples per skill in the greedy argmax (the authors: 100 for Light Switch Door, 10 for
+    Doorknobs and Coffee; ours: 100 everywhere)."""
     n_target_sample: int = 10
     """Parameter samples per skill when the online net picks the next action of a TD target (the
     authors: 1, which rarely finds a key's +-0.1 window and so undervalues the states before it)."""
@@ -94,8 +97,8 @@ class TrainConfig:
 
     @classmethod
     def for_env(cls, env: str, **overrides) -> "TrainConfig":
-        """The config for `env`: the paper's defaults, then the env's own (`train_defaults` of its class,
-        each documented there), then `overrides`."""
+        """The config for `env`: these defaults, then the env's own (`train_defaults` of its class, each
+        documented there), then `overrides`."""
         from envs_jax import env_class
         return cls(env=env, **{**env_class(env).train_defaults, **overrides})
 

@@ -1,21 +1,11 @@
 """The seed axis over devices: which devices (`--devices auto|N`), the mesh over them, padding the
 seeds to a multiple of the device count, and the program each device runs on its block of seeds.
 
-Why every device runs a *per-seed* program (one seed after another, `lax.map`), not a `vmap` over its
-block: XLA compiles the same per-seed math differently for different batch shapes (measured: in the
-Adam step, `nu / bias_correction` became `nu * (1 / bias_correction)` when a seed axis of size 2 was
-present, but stayed a division for one seed), so a seed's numbers would change in the last bits with
-the number of seeds on its device, and training amplifies that. Here the compiled per-seed computation
-is the same whatever the device count (1, 2, many; CPU or GPU) and whatever the other seeds are, with
-`optimization_barrier`s at its edges so that XLA cannot fuse it with the surrounding slicing. Seeds
-are padded (repeating the last seed) to a multiple of the device count; padded slots skip the work
-(a real `cond` on a per-slot flag) and are dropped from the results.
-
-`seed_block` B > 1 trades that for width: each device runs blocks of B seeds `vmap`ped together, one
-block after another. A GPU needs the width (one small seed at a time leaves it nearly idle). The
-numbers then depend on B (the compiled per-block program) but still not on the device count or on
-which seeds share a block; seeds are padded to a multiple of devices x B, and padded slots of a block
-compute alongside the real ones (under `vmap` the `cond` runs both branches) and are dropped.
+Each device runs a *per-seed* program (`lax.map` over its seeds, `optimization_barrier`s at the edges),
+not a `vmap`, because XLA compiles the same math differently for other batch shapes and the last bits
+would then depend on the device count; `seed_block` B > 1 vmaps blocks of B seeds for GPUs, and the
+numbers then depend on B only. Padded slots skip the work and are dropped (docs/DESIGN.md, "Seeds over
+devices").
 """
 from __future__ import annotations
 

@@ -1,13 +1,9 @@
 """The learner's optimiser: global-norm gradient clipping, then Adam (the paper's; reference/method.md §7).
 
-The arithmetic is optax's `chain(clip_by_global_norm(c), adam(lr))` (optax 0.2.8) operation for
-operation, and so is the state (checkpoints are interchangeable). One thing differs: each division of
-a whole tensor by one of the seed's scalars (the gradient norm, Adam's bias corrections) is made
-elementwise against a materialised divisor. Left as `tensor / scalar`, XLA may compile it as
-`tensor * (1 / scalar)` (one rounding more) in one program and keep the division in another, and
-which one it does changed with the number of devices once seeds were `vmap`ped in blocks
-(jaxbridge/devices.py); a seed's numbers then depended on the device count. A true division rounds the
-same way in every program.
+The arithmetic and the state are optax's `chain(clip_by_global_norm(c), adam(lr))`, operation for
+operation, except that each division of a tensor by a scalar is made elementwise: left as
+`tensor / scalar`, XLA may turn it into a multiplication by the reciprocal in some programs and not in
+others, and a seed's last bits then depended on the device count (docs/DESIGN.md, "Seeds over devices").
 """
 from __future__ import annotations
 

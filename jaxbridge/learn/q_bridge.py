@@ -73,16 +73,10 @@ class QNetwork(nn.Module):
     """MLP with leaky-ReLU hidden layers and a scalar output; optionally an ensemble of such MLPs whose
     value is their minimum (clipped double Q).
 
-    Two departures from the authors' plain ReLU network, both measured (docs/RESULTS.md): with sparse
-    rewards nearly every target is 0 at first, and fitting them switched most ReLUs of the second layer
-    off for good (9% alive after a few cycles on seed 0), leaving a constant Q that never fitted the few
-    rewarded transitions. A leaky slope keeps every unit trainable; the output layer starts at zero, so
-    the untrained Q is 0 everywhere (the authors' untrained Q is too).
-
-    With `ensemble` > 1, independently initialised members are fitted to the same targets and Q is
-    their minimum, in the greedy argmax and in the targets alike: where the members disagree (features
-    or parameters unlike the training data) the value is the pessimistic one, so the argmax over many
-    sampled parameters no longer picks one member's upward error (docs/RESULTS.md, Doorknobs)."""
+    Departures from the authors' ReLU network (docs/DESIGN.md, Learning): the leaky slope keeps units
+    alive under mostly-zero targets, the output layer starts at zero (so the untrained Q is 0, as theirs),
+    and with `ensemble` > 1 members fitted to the same targets give their minimum, in the argmax and the
+    targets alike, so the argmax over sampled parameters does not pick one member's upward error."""
 
     hidden_sizes: Sequence[int] = (32, 32)
     ensemble: int = 1
@@ -124,10 +118,8 @@ def encode(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Ar
                             jnp.broadcast_to(action, shape + action.shape[-1:])], axis=-1)
 
 
-# Observations at least this wide (the full-state ablations: 32 to 2027 values) go into the candidates'
-# Q as a SplitInput: their first-layer share is computed once per decision, not once per candidate
-# (Doorknobs: 2027 x 32 multiply-adds for each of 103 candidates). The object-centric features (4 to
-# 7 values) are evaluated whole: measured no faster split, and their published runs keep their bits.
+# Observations at least this wide (the full-state ablations) enter the candidates' Q as a SplitInput: their
+# first-layer share is computed once per decision. Narrower features stay whole (docs/DESIGN.md, Learning).
 SPLIT_FROM_FEATURES = 32
 
 

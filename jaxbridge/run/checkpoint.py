@@ -40,10 +40,8 @@ def _digests(step_dir: Path) -> dict[str, str]:
             for p in sorted(step_dir.rglob("*")) if p.is_file()}
 
 
-# Orbax keeps the id of "the current save" in a process-wide counter, which its background threads
-# read to find their completion signals. Two saves at once (approaches trained in worker threads) can
-# read each other's id and wait for a signal that never comes: measured, both saves hung 300 s and the
-# run died with a TimeoutError. Saves (a few ms at our sizes) therefore take turns.
+# Orbax keeps "the current save" in a process-wide counter: two saves at once (approaches in threads) can
+# wait on each other's signal forever, so saves take turns (docs/RELIABILITY.md).
 _SAVING = threading.Lock()
 
 

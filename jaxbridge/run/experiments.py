@@ -1,13 +1,9 @@
 """Experiments: several approaches trained on the same env and seeds, one run directory each, then
 compared (the paper's figure and tables).
 
-The approaches run concurrently in worker threads: each one's cycles are one jitted XLA computation
-that releases the GIL, so on a 2-core CPU two approaches train in about the time of one (measured 2.2x
-for two 8-seed cycles in two threads vs one after the other). Each approach's numbers do not depend on
-what runs beside it. One progress bar counts the cycles of all of them. Each approach also shards its
-seeds over devices (learn/devices.py): the workers split `devices` between them, so that two
-approaches on 2 cores run one device each rather than four device streams on two cores (Light Switch
-Door's six approaches: 373.6 s vs 402.7 s, docs/PERFORMANCE.md). Neither changes any number.
+The approaches run concurrently in worker threads (a jitted cycle releases the GIL), which split the
+devices between them; one progress bar counts every cycle. Neither changes any number
+(docs/DESIGN.md, Host loop; docs/PERFORMANCE.md for the times).
 """
 from __future__ import annotations
 

@@ -9,9 +9,8 @@ environment (the tests set one) is left as it is.
 What the cache cannot hold: JAX does not write programs that contain host callbacks (their Python
 function pointers differ between processes). The training cycle and every meta-policy rollout contain
 one, the host planner behind the plan tables (planner/tables.py, a `jax.pure_callback` taken only on a
-table miss), so those are compiled afresh in every process; the cache serves the ~136 smaller programs
-around them (learner initialisation, random draws, placing seeds on devices, checkpoint restore, ...). See
-docs/PERFORMANCE.md for the measured effect.
+table miss), so those are compiled afresh in every process; the cache serves the smaller programs
+around them (docs/PERFORMANCE.md).
 """
 from __future__ import annotations
 
@@ -22,9 +21,7 @@ from pathlib import Path
 
 import jax
 
-# Programs that compile faster than this are not written. JAX's default is 1 s, which keeps nothing of a
-# train.py run but the uncacheable cycle; its ~136 other programs take 0.01-1 s each, ~10 s together on
-# the 2-core machine, and all of them come back from the cache in ~0.4 s (docs/PERFORMANCE.md).
+# Keep every program: JAX's default (1 s) would keep none of a run's many small ones (docs/PERFORMANCE.md).
 MIN_COMPILE_SECS = 0.0
 
 BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
@@ -70,7 +67,7 @@ class CompileEvents:
     with their seconds; a program loaded from the persistent cache counts too, and also as a
     `cache_hit`), functions traced and tracing and lowering seconds. Counts every thread's work.
     (A jitted function's `_cache_size()` is no substitute: its dispatch cache can gain an entry
-    without any tracing or compiling, measured with the cycle on 2 devices.)"""
+    without any tracing or compiling.)"""
 
     def __init__(self):
         self.compiles = 0
