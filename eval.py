@@ -23,11 +23,11 @@ from pathlib import Path
 from jaxbridge.commands import evaluate
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.utils import compile_cache
-from jaxbridge.utils.cli import non_negative_int, positive_int, run_main
+from jaxbridge.utils.cli import ArgumentParser, non_negative_int, positive_int, run_main
 
 
 def parse_args(argv):
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("runs", nargs="*", type=Path, metavar="RUN",
                         help="an experiment directory written by train.py (or one approach's run directory in "
                              "it): evaluate the latest checkpoint greedily; two RUNs: side by side")

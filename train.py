@@ -33,7 +33,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.learn.devices import device_count_arg, select_devices
 from jaxbridge.utils import compile_cache
-from jaxbridge.utils.cli import UsageError, non_negative_int, positive_int, run_main
+from jaxbridge.utils.cli import ArgumentParser, UsageError, non_negative_int, positive_float, positive_int, run_main
 
 DEFAULTS = TrainConfig()
 
@@ -53,7 +53,7 @@ def approach_list(text: str) -> list[str]:
 
 
 def parse_args(argv):
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     d = DEFAULTS
     p.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(registered())}, or package.module:Class "
                                               f"for an env of your own (checked first; docs/NEW_ENV.md) (default: {d.env})")
@@ -98,6 +98,9 @@ def parse_args(argv):
                         "1 runs them one after another, which keeps each seed's numbers independent of every other "
                         "seed, and on 2 CPU cores was as fast as blocks (docs/PERFORMANCE.md). Results depend on "
                         f"the block (not on --devices) (default: {d.seed_block})")
+    p.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
+                   help="refuse a run whose memory estimate (learner states, replay buffers, tasks and plan tables) "
+                        "exceeds this many GiB (default: the memory available when it starts)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
     p.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return p.parse_args(argv)
@@ -124,7 +127,7 @@ def main(argv=None) -> int:
         out_dir, run = args.resume, command.resumed(args.resume, progress, args.workers, devices)
     else:
         out_dir, run = command.new_experiment(vars(args), args.approaches, args.out, args.name, args.overwrite,
-                                              progress, args.workers, devices)
+                                              progress, args.workers, devices, args.max_memory)
     try:
         summaries = run()
     except CheckpointError as err:

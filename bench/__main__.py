@@ -80,7 +80,7 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
                     "mean_test_solve_rate": run["rates"]}
     out["rss_after_cycles_mib"] = round(rss_mib(), 1)
 
-    r = measure_updates(run["experiment"], run["seeds"], run["learners"], config.updates_per_cycle, update_repeats)
+    r = measure_updates(run["setup"], run["seeds"], run["learners"], config.updates_per_cycle, update_repeats)
     out["updates"] = {k: round(v, 4) if isinstance(v, float) else v for k, v in r.items()}
     out["rss_peak_mib"] = round(rss_mib(), 1)
     out["rss_growth_mib"] = round(rss_mib() - base, 1)

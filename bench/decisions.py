@@ -22,15 +22,15 @@ def main() -> None:
     parser.add_argument("--max-decisions", type=int, default=12, help="decisions printed per failed task")
     args = parser.parse_args()
     config, _ = swept_config(args)
-    experiment, learners, rates = train_seeds(config)
+    setup, learners, rates = train_seeds(config)
     print_digits(config.seeds, rates)
 
-    test, env, net = experiment.test, experiment.test_env, experiment.dqn.net
+    test, env, net = setup.test, setup.test_env, setup.dqn.net
     owner = np.repeat(np.arange(config.num_seeds), config.num_test_tasks)
     greedy = episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
     keys = jax.random.split(jax.random.key(123), len(owner))
-    result, records = rollout(env, experiment.bridge(env), greedy, test.arrays, keys,
-                              test.max_steps, record=True, controls=experiment.approach.controls)
+    result, records = rollout(env, setup.bridge(env), greedy, test.arrays, keys,
+                              test.max_steps, record=True, controls=setup.approach.controls)
     names = env.skill_names + ("CallPlanner",)
     success = np.asarray(result.success)
     decided = np.asarray(records.decided & records.live)

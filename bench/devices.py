@@ -32,12 +32,12 @@ def main() -> None:
     from jaxbridge.learn.setup import make_setup
 
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, seed_block=args.seed_block)
-    experiment = make_setup(config)
+    setup = make_setup(config)
     layouts = {}
     for n in (1, args.devices):
         seeds = SeedMesh(config.num_seeds, tuple(devices[:n]), config.seed_block)
-        layouts[n] = {"seeds": seeds, "cycle": Cycle(experiment, seeds),
-                      "learners": seeds.place(experiment.init_learners()), "times": [], "metrics": []}
+        layouts[n] = {"seeds": seeds, "cycle": Cycle(setup, seeds),
+                      "learners": seeds.place(setup.init_learners()), "times": [], "metrics": []}
     for _ in range(args.cycles):
         for layout in layouts.values():
             t0 = time.perf_counter()

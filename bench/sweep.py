@@ -45,7 +45,7 @@ def train_seeds(config: TrainConfig) -> tuple[Setup, object, np.ndarray]:
     run files. Returns the setup, the final learners (one device) and the test solve rates
     float[seeds, cycles]."""
     run = measure_cycles(config, select_devices("auto"))
-    return run["experiment"], run["seeds"].unpad(run["learners"]), run["seed_rates"]
+    return run["setup"], run["seeds"].unpad(run["learners"]), run["seed_rates"]
 
 
 def print_digits(seeds: list[int], rates: np.ndarray) -> None:

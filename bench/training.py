@@ -25,18 +25,18 @@ AUTHORS_WHOLE_RUN_S = {"light_switch_door": 17_572, "doorknobs": 21_118, "coffee
 
 
 def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None) -> dict:
-    """Build `config`'s experiment with the seeds over `devices` and run `cycles` cycles (default:
+    """Build `config`'s setup with the seeds over `devices` and run `cycles` cycles (default:
     config.cycles). Returns the times (build, each cycle), what JAX compiled in the first cycle and in
     the later ones (jaxbridge.utils.compile_cache.CompileEvents), each cycle's mean test solve rate ("rates")
-    and per seed ("seed_rates", float[seeds, cycles]), and the experiment, seed layout and final
+    and per seed ("seed_rates", float[seeds, cycles]), and the setup, seed layout and final
     learners (for further measurements)."""
     from jaxbridge.utils import compile_cache
 
     start = time.perf_counter()
-    experiment = make_setup(config)
+    setup = make_setup(config)
     seeds = SeedMesh(config.num_seeds, tuple(devices), config.seed_block)
-    learners = seeds.place(experiment.init_learners())
-    cycle = Cycle(experiment, seeds)
+    learners = seeds.place(setup.init_learners())
+    cycle = Cycle(setup, seeds)
     built = time.perf_counter()
     times, seed_rates = [], []
 
@@ -54,7 +54,7 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
             learners = one(learners)
     return {"build_s": built - start, "times": times, "rates": [float(r.mean()) for r in seed_rates],
             "seed_rates": np.array(seed_rates).T, "first": first, "later": later,
-            "total_s": time.perf_counter() - start, "experiment": experiment, "seeds": seeds, "learners": learners, "cycle": cycle}
+            "total_s": time.perf_counter() - start, "setup": setup, "seeds": seeds, "learners": learners, "cycle": cycle}
 
 
 def main() -> None:

@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 
 
-def measure_updates(experiment, seeds, learners, updates: int, repeats: int = 3) -> dict:
+def measure_updates(setup, seeds, learners, updates: int, repeats: int = 3) -> dict:
     """`updates` minibatch updates of every seed of `learners` (placed on `seeds`), `repeats` timed
     calls after a compiling one. Returns compile seconds (tracing, lowering and XLA of the first call), the median seconds per call
     and updates per second over all seeds."""
@@ -25,8 +25,8 @@ def measure_updates(experiment, seeds, learners, updates: int, repeats: int = 3)
     from dataclasses import replace
     from jaxbridge.learn.dqn import minibatch_indices, update_step
 
-    config = replace(experiment.config, updates_per_cycle=updates)
-    learning = replace(experiment.dqn, config=config)
+    config = replace(setup.config, updates_per_cycle=updates)
+    learning = replace(setup.dqn, config=config)
 
     def per_seed(learner, targets):
         key, indices = minibatch_indices(config, learner)
@@ -65,7 +65,7 @@ def main() -> None:
 
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds)
     run = measure_cycles(config, devices, cycles=2)
-    r = measure_updates(run["experiment"], run["seeds"], run["learners"], args.updates or config.updates_per_cycle,
+    r = measure_updates(run["setup"], run["seeds"], run["learners"], args.updates or config.updates_per_cycle,
                         args.repeats)
     print(f"jax {jax.__version__}, seeds over {describe(devices)} device(s)")
     print(f"{config.env}: {r['seeds']} seeds x {r['updates']} updates (batch {config.batch_size}): compile "

@@ -52,8 +52,8 @@ def primitives(closed_jaxpr) -> Counter:
 
 
 def cycle_program(approach: str) -> Counter:
-    experiment = make_setup(replace(TINY, approach=approach))
-    return primitives(jax.make_jaxpr(Cycle(experiment))(experiment.init_learners()))
+    setup = make_setup(replace(TINY, approach=approach))
+    return primitives(jax.make_jaxpr(Cycle(setup))(setup.init_learners()))
 
 
 def test_every_approach_is_registered_with_its_parts():
@@ -113,16 +113,16 @@ def test_pure_planning_replans_whenever_stuck_and_solves_nothing(tests_batch):
 
 def test_no_feature_selection_sees_the_padded_full_state(tests_batch):
     approach = get_approach("no_feature_selection")
-    experiment = make_setup(replace(TINY, approach=approach.name))
-    kernel = experiment.init_learners().params["params"]["UniformDense_0"]["kernel"]
-    env = experiment.test_env
+    setup = make_setup(replace(TINY, approach=approach.name))
+    kernel = setup.init_learners().params["params"]["UniformDense_0"]["kernel"]
+    env = setup.test_env
     assert kernel.shape[1] == LightSwitchDoor.full_state_size + env.num_skills + 1 + 1  # [seeds, inputs, 32]
     ours = make_setup(TINY).init_learners().params["params"]["UniformDense_0"]["kernel"]
     assert ours.shape[1] == LightSwitchDoor.num_features + env.num_skills + 1 + 1
 
     # The full state is the same size for the 5-cell training env and the 20-cell test env, and it
     # carries what the object-centric features leave out (robot position, light, every door).
-    train_env = experiment.train.env
+    train_env = setup.train.env
     assert train_env.max_cells < env.max_cells
     task = jax.tree.map(lambda x: x[0], tests_batch.tasks)
     state = tests_batch.env.reset(task)
@@ -147,9 +147,9 @@ def test_approaches_of_one_experiment_share_its_tasks_and_other_seeds_get_their_
 
 def test_random_and_pure_planning_leave_the_network_untouched():
     for name in ("random", "pure_planning"):
-        experiment = make_setup(replace(TINY, approach=name))
-        learners = experiment.init_learners()
-        after, metrics = Cycle(experiment)(learners)
+        setup = make_setup(replace(TINY, approach=name))
+        learners = setup.init_learners()
+        after, metrics = Cycle(setup)(learners)
         assert all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(learners.params),
                                                         jax.tree.leaves(after.params)))
         assert float(metrics.loss[0]) == 0.0 and int(metrics.buffer_size[0]) == 0

@@ -247,14 +247,14 @@ def test_different_seeds_get_different_networks_and_the_same_seed_the_same():
     chex.assert_trees_all_equal(a.replace(key=None), c.replace(key=None))  # the whole learner, bit for bit
 
 
-def _train(config, experiment=None, cycle=None):
-    experiment = experiment or make_setup(config)
-    learners, cycle = experiment.init_learners(), cycle or Cycle(experiment)
+def _train(config, setup=None, cycle=None):
+    setup = setup or make_setup(config)
+    learners, cycle = setup.init_learners(), cycle or Cycle(setup)
     history = []
     for _ in range(config.cycles):
         learners, metrics = cycle(learners)
         history.append(jax.tree.map(np.asarray, metrics))
-    return experiment, learners, history
+    return setup, learners, history
 
 
 @pytest.fixture(scope="module")
@@ -262,12 +262,12 @@ def tiny_twice():
     """TINY trained twice from scratch with one compiled cycle on one device (compiling is most of a short
     run's time; identity across processes is checked by the resume tests of test_reliability.py), with
     the programs traced and compiled during each cycle (jax.monitoring, jaxbridge.utils.compile_cache)."""
-    experiment = make_setup(TINY)
+    setup = make_setup(TINY)
     seeds = SeedMesh(TINY.num_seeds)  # one device: where XLA once handed back replicated leaves
-    cycle = Cycle(experiment, seeds)
+    cycle = Cycle(setup, seeds)
     runs, compiled = [], []
     for _ in range(2):
-        learners, history = seeds.place(experiment.init_learners()), []
+        learners, history = seeds.place(setup.init_learners()), []
         for _ in range(TINY.cycles):
             with compile_cache.record() as record:
                 learners, metrics = cycle(learners)
@@ -275,7 +275,7 @@ def tiny_twice():
             compiled.append(record)
             history.append(jax.tree.map(np.asarray, metrics))
         runs.append((learners, history))
-    return experiment, seeds, cycle, runs, compiled
+    return setup, seeds, cycle, runs, compiled
 
 
 def test_the_cycle_compiles_once_for_every_cycle_and_run(tiny_twice):
@@ -297,15 +297,15 @@ def test_the_same_seeds_give_identical_metrics_twice(tiny_twice):
 
 
 def test_checkpoint_round_trip_restores_identical_greedy_actions(tiny_twice, tmp_path):
-    experiment, seeds, _, ((learners, _), _), _ = tiny_twice
+    setup, seeds, _, ((learners, _), _), _ = tiny_twice
     learners = seeds.unpad(learners)
     checkpoint.save(tmp_path / "ckpt", 3, learners, {"cycle": 3})
-    fresh = experiment.init_learners()
+    fresh = setup.init_learners()
     restored, record, step = checkpoint.restore(tmp_path / "ckpt", fresh)
     assert step == 3 and record == {"cycle": 3}
     as_data = lambda tree: jax.tree.leaves(tree.replace(key=jax.random.key_data(tree.key)))
     assert all(np.array_equal(x, y) for x, y in zip(as_data(learners), as_data(restored)))
-    net, skills = experiment.dqn.net, candidate_skills(ENV, 10)
+    net, skills = setup.dqn.net, candidate_skills(ENV, 10)
     features = jax.random.uniform(jax.random.key(5), (32, ENV.num_features))
     ground = jnp.ones((32, ENV.num_skills + 1), jnp.int32)
     keys = jax.random.split(jax.random.key(6), 32)
@@ -322,13 +322,13 @@ def test_checkpoint_round_trip_restores_identical_greedy_actions(tiny_twice, tmp
 def test_a_checkpoint_whose_buffer_still_holds_next_features_restores(tiny_twice, tmp_path):
     """Checkpoints written before the buffer dropped next_features (it stored them per transition) load
     into today's learner: the extra field is left out, everything else comes back exactly."""
-    experiment, seeds, _, ((learners, _), _), _ = tiny_twice
+    setup, seeds, _, ((learners, _), _), _ = tiny_twice
     learners = seeds.unpad(learners)
     data = learners.buffer.data
     old_layout = learners.replace(buffer=learners.buffer.replace(data=data.replace(
         next_features=jnp.roll(data.features, -1, axis=1))))
     checkpoint.save(tmp_path / "old", 3, old_layout, {"cycle": 3})
-    restored, _, _ = checkpoint.restore(tmp_path / "old", experiment.init_learners())
+    restored, _, _ = checkpoint.restore(tmp_path / "old", setup.init_learners())
     assert restored.buffer.data.next_features is None
     as_data = lambda tree: jax.tree.leaves(tree.replace(key=jax.random.key_data(tree.key)))
     assert all(np.array_equal(x, y) for x, y in zip(as_data(learners), as_data(restored)))
@@ -347,9 +347,9 @@ def test_smooth_reward_is_the_papers_trailing_window():
 
 def test_a_short_learning_run_beats_the_RandomBridge():
     config = TrainConfig(num_seeds=2, first_seed=1, cycles=12, updates_per_cycle=500, num_test_tasks=5)
-    experiment, _, history = _train(config)
+    setup, _, history = _train(config)
     learned = np.stack([m.test_solve_rate for m in history[-5:]]).mean(0)  # per seed, last 5 cycles
     from jaxbridge.run.evaluate import run_bridge
-    random = run_bridge(experiment.test, make_bridge("random", experiment.test.env), seed=0).success.mean()
+    random = run_bridge(setup.test, make_bridge("random", setup.test.env), seed=0).success.mean()
     assert learned.max() >= 0.8 and learned.max() > random
     assert history[-1].train_success_rate.max() > history[0].train_success_rate.max()

@@ -18,7 +18,8 @@ import pytest
 from jaxbridge.run import checkpoint
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
-from jaxbridge.run.runner import NumericalFault, prepare_run_dir, train
+from jaxbridge.run import rundir
+from jaxbridge.run.runner import NumericalFault, train
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ["--num-seeds", "2", "--cycles", "6", "--updates-per-cycle", "50", "--checkpoint-every", "1", "--no-progress",
@@ -83,7 +84,7 @@ def test_a_damaged_checkpoint_is_refused(uninterrupted, tmp_path, damage):
 def test_a_non_finite_q_function_stops_the_run_and_keeps_the_last_good_checkpoint(tmp_path):
     config = TrainConfig(num_seeds=2, cycles=4, updates_per_cycle=20, checkpoint_every=1, num_test_tasks=2)
     run_dir = tmp_path / "nan"
-    prepare_run_dir(run_dir, overwrite=False)
+    rundir.prepare(run_dir, overwrite=False)
 
     def poison(cycle, learners):
         if cycle != 3:

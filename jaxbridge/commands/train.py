@@ -27,12 +27,16 @@ def make_config(flags: dict) -> tuple[TrainConfig, type]:
                          f"({config.buffer_capacity} transitions)")
     if config.seed_block > config.num_seeds:
         raise UsageError(f"--seed-block {config.seed_block} is larger than the {config.num_seeds} seeds")
+    return config, env_cls
+
+
+def check_reachable(config: TrainConfig, env_cls) -> None:
+    """Refuse a training horizon too short for some seed's training task ever to reach its goal."""
     needed = {seed: env_cls.train_task(seed).min_steps for seed in config.seeds}
     worst = max(needed, key=needed.get)
     if config.train_steps < needed[worst]:
         raise UsageError(f"--train-steps {config.train_steps} is too small to ever reach the goal: seed {worst}'s "
                          f"training task needs at least {needed[worst]} steps")
-    return config, env_cls
 
 
 def default_approaches(env_cls) -> list[str]:
@@ -46,40 +50,67 @@ def default_approaches(env_cls) -> list[str]:
 
 
 def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: str | None, overwrite: bool,
-                   progress: bool, workers: int | None, devices: list) -> tuple[Path, Callable[[], dict]]:
-    """(experiment directory, the training to run) of a new experiment."""
-    from jaxbridge.run.experiments import train_approaches
-    from jaxbridge.run.runner import prepare_run_dir
+                   progress: bool, workers: int | None, devices: list,
+                   max_memory: float | None = None) -> tuple[Path, Callable[[], dict]]:
+    """(experiment directory, the training to run) of a new experiment; the directory is locked. A run
+    whose memory estimate exceeds `max_memory` GiB (default: what is available) is refused first."""
+    from jaxbridge.run import memory, rundir
+    from jaxbridge.run.experiments import default_workers, train_approaches
 
     config, env_cls = make_config(flags)
     approaches = approaches or default_approaches(env_cls)
-    out_dir = out / (name or env_cls.name)
     try:
-        prepare_run_dir(out_dir, overwrite)
-    except FileExistsError as err:
+        memory.check_training(config, env_cls, approaches, workers or default_workers(approaches),
+                              None if max_memory is None else int(max_memory * 2**30))
+    except memory.TooBig as err:
+        raise UsageError(str(err)) from None
+    check_reachable(config, env_cls)
+    try:
+        if name is not None:
+            rundir.check_name(name)
+        out_dir = out / (name or env_cls.name)
+        replaced = rundir.prepare(out_dir, overwrite)
+        lock = rundir.RunLock(out_dir).acquire()
+    except rundir.RunDirError as err:
         raise UsageError(str(err)) from None
     except OSError as err:
-        raise UsageError(f"cannot write experiment directory {out_dir}: {err.strerror}") from None
-    return out_dir, lambda: train_approaches(config, approaches, out_dir, progress, workers=workers, devices=devices)
+        raise UsageError(f"cannot write experiment directory {out / (name or env_cls.name)}: {err.strerror}") from None
+    return out_dir, _releasing(lock, lambda: train_approaches(config, approaches, out_dir, progress, workers=workers,
+                                                              devices=devices, replaced=replaced))
 
 
 def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list) -> Callable[[], dict]:
-    """The training that continues the experiment (or one approach's run) in `run_dir`."""
+    """The training that continues the experiment (or one approach's run) in `run_dir`, locked."""
     from jaxbridge.learn.setup import make_setup
-    from jaxbridge.run.experiments import is_experiment_dir, load_experiment, train_approaches
+    from jaxbridge.run import rundir
+    from jaxbridge.run.checkpoint import CheckpointError
+    from jaxbridge.run.experiments import check_resumable, is_experiment_dir, load_experiment, train_approaches
     from jaxbridge.run.runner import load_config, train
 
     try:
         if is_experiment_dir(run_dir):
             config, approaches = load_experiment(run_dir)
             load_env(config.env)
-            return lambda: train_approaches(config, approaches, run_dir, progress, resume=True, workers=workers,
-                                            devices=devices)
-        config = load_config(run_dir)
-        setup = make_setup(config, load_env(config.env))
-        return lambda: {config.approach: train(setup, run_dir, progress, resume=True, devices=devices)}
-    except ValueError as err:
+            check_resumable(run_dir, approaches)
+            run = lambda: train_approaches(config, approaches, run_dir, progress, resume=True, workers=workers,
+                                           devices=devices)
+        else:
+            config = load_config(run_dir)
+            setup = make_setup(config, load_env(config.env))
+            run = lambda: {config.approach: train(setup, run_dir, progress, resume=True, devices=devices)}
+        return _releasing(rundir.RunLock(run_dir).acquire(), run)
+    except (ValueError, CheckpointError, rundir.RunDirError) as err:
         raise UsageError(str(err)) from None
+
+
+def _releasing(lock, run: Callable[[], dict]) -> Callable[[], dict]:
+    """`run`, releasing `lock` however it ends."""
+    def locked():
+        try:
+            return run()
+        finally:
+            lock.release()
+    return locked
 
 
 def report(name: str, info: dict) -> str:

@@ -61,7 +61,8 @@ def _by_seed(tree, seeds: int):
 def make_seed_cycle(setup: Setup) -> Callable:
     """One seed's cycle: (learner, its training TaskArrays, its test TaskArrays) -> (learner, CycleMetrics
     of scalars). The same computation for every seed."""
-    config, approach, controls, train, test = setup.config, setup.approach, setup.approach.controls, setup.train, setup.test
+    config, approach, train, test = setup.config, setup.approach, setup.train, setup.test
+    controls = approach.controls
     train_bridge, test_bridge = setup.bridge(train.env), setup.bridge(test.env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train.env.num_skills

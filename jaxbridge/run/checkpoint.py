@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import shutil
 import threading
 from pathlib import Path
 from typing import Any
@@ -51,10 +52,15 @@ def save(directory: Path, step: int, state: Any, record: dict) -> None:
 
 
 def _save(directory: Path, step: int, state: Any, record: dict) -> None:
+    unsealed = directory / str(step)
+    if unsealed.exists() and not _manifest_path(directory, step).is_file():
+        shutil.rmtree(unsealed)  # a save of this step that never completed: orbax would keep its files
     with _manager(directory) as mgr:
-        mgr.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state),
-                                               record=ocp.args.JsonSave(record)))
+        saved = mgr.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state),
+                                                       record=ocp.args.JsonSave(record)))
         mgr.wait_until_finished()
+        if not saved:
+            raise CheckpointError(f"orbax did not save checkpoint {step} in {directory} (it holds that step already)")
         kept = set(mgr.all_steps())
     write_atomic(_manifest_path(directory, step), json.dumps(_digests(directory / str(step))))
     for old in directory.glob("*.sha256.json"):  # manifests of checkpoints orbax has dropped
@@ -71,9 +77,21 @@ def sealed_steps(directory: Path) -> list[int]:
                   if p.is_dir() and p.name.isdigit() and _manifest_path(directory, int(p.name)).is_file())
 
 
+def _read_manifest(directory: Path, step: int) -> dict[str, str]:
+    path = _manifest_path(directory, step)
+    try:
+        manifest = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise CheckpointError(f"checkpoint manifest {path} is corrupted ({err}); refusing to load checkpoint {step}") from None
+    if not (isinstance(manifest, dict) and all(isinstance(k, str) and isinstance(v, str) for k, v in manifest.items())):
+        raise CheckpointError(f"checkpoint manifest {path} is corrupted (not a map of file names to digests); "
+                              f"refusing to load checkpoint {step}")
+    return manifest
+
+
 def verify(directory: Path, step: int) -> None:
     directory = Path(directory)
-    expected = json.loads(_manifest_path(directory, step).read_text())
+    expected = _read_manifest(directory, step)
     actual = _digests(directory / str(step))
     if actual != expected:
         changed = sorted(set(expected) ^ set(actual) | {k for k in expected if actual.get(k) != expected[k]})

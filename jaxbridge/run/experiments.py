@@ -21,8 +21,9 @@ from envs_jax import env_class
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.setup import make_setup
-from jaxbridge.run import artifacts, checkpoint, comparison
-from jaxbridge.run.runner import Interrupted, prepare_run_dir, train
+from jaxbridge.run import checkpoint, comparison, rundir
+from jaxbridge.run.runner import Interrupted, train
+from jaxbridge.utils.files import write_atomic
 
 EXPERIMENT_FILE = "experiment.json"
 # Seconds per approach in `python -m bench.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
@@ -56,15 +57,30 @@ def split_devices(devices: list | None, workers: int) -> list:
     return [devices[i::workers] for i in range(workers)]
 
 
+def check_resumable(experiment_dir: Path, approaches: list[str]) -> None:
+    """Refuse (CheckpointError) to resume an experiment an approach of which has results but no checkpoint
+    left: resuming would silently train it again from scratch."""
+    for name in approaches:
+        run_dir = experiment_dir / name
+        if (run_dir / "metrics.csv").is_file() and not checkpoint.sealed_steps(run_dir / "checkpoints"):
+            raise checkpoint.CheckpointError(f"{run_dir} has results but no complete checkpoint to resume from; "
+                                             f"start the experiment over with --overwrite")
+
+
 def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
-                     resume: bool = False, workers: int | None = None, devices: list | None = None) -> dict[str, dict]:
+                     resume: bool = False, workers: int | None = None, devices: list | None = None,
+                     replaced: Path | None = None) -> dict[str, dict]:
     """Train every approach (run directory `experiment_dir/<approach>`), `workers` at a time, then write
     the comparison files (figure, results.md, results.csv), also after a fault or Ctrl-C for the
     approaches that have files. With `resume`, finished approaches are kept, started ones continue
-    from their checkpoint and the others start. Returns each approach's summary, in list order."""
-    if not resume:
-        artifacts.write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
+    from their checkpoint and the others start. `replaced`: the run this one replaces, moved aside, deleted
+    once this one's experiment file is written. Returns each approach's summary, in list order."""
+    if resume:
+        check_resumable(experiment_dir, approaches)
+    else:
+        write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
             {"config": config.to_dict(), "approaches": approaches}, indent=2) + "\n")
+        rundir.discard(replaced)
     workers = workers or default_workers(approaches)
     env_cls = env_class(config.env)  # resolved once for every approach
     bar = tqdm(total=config.cycles * len(approaches), unit="cycle", disable=not progress, dynamic_ncols=True,
@@ -80,7 +96,7 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         run_dir = experiment_dir / name
         started = (run_dir / "checkpoints").is_dir() and bool(checkpoint.sealed_steps(run_dir / "checkpoints"))
         if not started:
-            prepare_run_dir(run_dir, overwrite=True)
+            rundir.fresh(run_dir)
         share = device_shares.get()
         try:
             return train(make_setup(dataclasses.replace(config, approach=name), env_cls), run_dir, resume=started,

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import shutil
 import threading
 import time
 from pathlib import Path
@@ -19,6 +18,7 @@ from jaxbridge.learn.devices import SeedMesh, describe
 from jaxbridge.learn.online import Cycle, CycleMetrics
 from jaxbridge.learn.setup import Setup, make_setup
 from jaxbridge.run import artifacts, checkpoint
+from jaxbridge.utils.files import write_atomic
 
 
 class Interrupted(Exception):
@@ -31,18 +31,6 @@ class Interrupted(Exception):
 
 class NumericalFault(Exception):
     """A non-finite loss or Q-value: the run stops, keeping the last good checkpoint."""
-
-
-def prepare_run_dir(run_dir: Path, overwrite: bool) -> None:
-    """Create the run directory; refuse to touch an existing non-empty one unless asked to."""
-    if run_dir.exists() and not run_dir.is_dir():
-        raise FileExistsError(f"{run_dir} exists and is not a directory")
-    if run_dir.exists() and any(run_dir.iterdir()):
-        if not overwrite:
-            raise FileExistsError(f"run directory {run_dir} already exists (pass --overwrite to replace it, "
-                                  f"or --resume {run_dir} to continue it)")
-        shutil.rmtree(run_dir)
-    run_dir.mkdir(parents=True, exist_ok=True)
 
 
 def _record(config: TrainConfig, history: list[CycleMetrics], elapsed_s: float) -> dict:
@@ -118,7 +106,7 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
         learners, record, _ = checkpoint.restore(run_dir / "checkpoints", learners)
         history, elapsed_before = _history(record), float(record["elapsed_s"])
     else:
-        artifacts.write_atomic(run_dir / "config.json", json.dumps(config.to_dict(), indent=2) + "\n")
+        write_atomic(run_dir / "config.json", json.dumps(config.to_dict(), indent=2) + "\n")
     cycle = Cycle(setup, seeds)
     learners = seeds.place(learners)  # checkpoints hold the unpadded state on one device
     last_saved = len(history)

@@ -1,0 +1,74 @@
+"""What a run will hold in memory, estimated before anything is built, so a run too big to fit is refused
+in seconds instead of swapping for half an hour."""
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import jax
+import numpy as np
+
+from envs_jax import NoveltyEnv
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.tasks import make_batch
+from jaxbridge.learn.setup import make_setup
+
+# A seed's learner state lives three times at once: the state a cycle reads (kept as the last good one),
+# the state it returns, and the host copy a checkpoint writes.
+STATE_COPIES = 3
+RUNTIME_BYTES = 1 << 30  # JAX, XLA's compiled programs and Python, before any seed
+
+
+class TooBig(Exception):
+    """The estimate exceeds the memory allowed; the message says what to lower."""
+
+
+def available_bytes() -> int:
+    """Memory the system can give without swapping (Linux's MemAvailable; else all physical memory)."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def tree_bytes(tree) -> int:
+    def nbytes(x) -> int:
+        if jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key):  # a typed PRNG key: its raw words
+            return int(np.prod(x.shape)) * 8
+        return int(np.prod(x.shape)) * np.dtype(x.dtype).itemsize
+    return sum(nbytes(x) for x in jax.tree.leaves(tree))
+
+
+def state_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
+    """One seed's learner state for `config.approach`, from abstract shapes (nothing is allocated)."""
+    return tree_bytes(jax.eval_shape(make_setup(dataclasses.replace(config, num_seeds=1), env_cls).init_learners))
+
+
+def task_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
+    """One seed's training and test tasks with their plan tables (the first seed's, compiled), which every
+    approach of an experiment shares."""
+    seed = config.first_seed
+    specs = [env_cls.train_task(seed)] * config.episodes_per_cycle + env_cls.test_tasks(seed, config.num_test_tasks)
+    return tree_bytes(make_batch(env_cls, specs, [seed] * len(specs)).arrays)
+
+
+def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], approaches: list[str], workers: int,
+                   limit: int | None = None) -> int:
+    """The estimate for `approaches` trained `workers` at a time (the largest together); TooBig if it
+    exceeds `limit` bytes (default: the memory available now)."""
+    what = "available" if limit is None else "allowed by --max-memory"
+    limit = available_bytes() if limit is None else limit
+    states = sorted((state_bytes(dataclasses.replace(config, approach=a), env_cls) for a in approaches), reverse=True)
+    per_seed = STATE_COPIES * sum(states[:max(1, workers)]) + task_bytes(config, env_cls)
+    need = RUNTIME_BYTES + config.num_seeds * per_seed
+    if need > limit:
+        fit = max(0, (limit - RUNTIME_BYTES) // per_seed)
+        raise TooBig(f"this run needs about {need / 2**30:.1f} GiB ({per_seed / 2**20:.1f} MiB per seed for "
+                     f"{', '.join(approaches) if len(approaches) <= 2 else f'{workers} approaches at a time'}, "
+                     f"x {config.num_seeds} seeds), more than the {limit / 2**30:.1f} GiB {what}; lower --num-seeds (about {fit} fit)"
+                     f"{', --workers' if workers > 1 else ''} or --approaches, or raise --max-memory")
+    return need
