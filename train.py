@@ -12,7 +12,8 @@ The experiment directory (default runs/<env>) gets curves.png (test and training
 approach, mean and min-max band over seeds), results.md and results.csv (test solve rate at cycles
 10/25/50/100 and the final smooth reward), and one run directory per approach with config.json,
 metrics.csv (one row per seed x cycle), summary.json, curves.png and checkpoints/ (orbax, whole learner
-state), which eval.py loads. Exit codes: 0 done, 2 bad input, 3 numerical fault, 130 interrupted.
+state), which eval.py loads. Exit codes: 0 done, 2 bad input, 3 numerical fault, 4 cannot write (no
+space, read-only, permission; the last complete checkpoint stays), 130 interrupted (docs/RELIABILITY.md).
 
 Devices: the seeds are sharded over --devices local devices (all GPUs, or on a CPU-only machine one
 virtual CPU device per core), each device training its share of the seeds; a run may resume on another
@@ -24,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 from envs_jax import registered
@@ -101,6 +101,8 @@ def parse_args(argv):
     p.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
                    help="refuse a run whose memory estimate (learner states, replay buffers, tasks and plan tables) "
                         "exceeds this many GiB (default: the memory available when it starts)")
+    p.add_argument("--debug", action="store_true",
+                   help="show the tracebacks and orbax's own messages behind an error (default: one line)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
     p.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return p.parse_args(argv)
@@ -113,37 +115,7 @@ def main(argv=None) -> int:
     except ValueError as err:
         raise UsageError(str(err)) from None
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles
-    from jaxbridge.run.checkpoint import CheckpointError
-    from jaxbridge.run.experiments import is_experiment_dir
-    from jaxbridge.run.runner import Interrupted, NumericalFault
-
-    start, progress = time.perf_counter(), not args.no_progress
-    if args.resume is not None:
-        clashing = [f"--{flag.replace('_', '-')}" for flag in command.CONFIG_FLAGS if getattr(args, flag) is not None]
-        clashing += [f for f, on in (("--overwrite", args.overwrite), ("--name", args.name),
-                                     ("--approaches", args.approaches is not None)) if on]
-        if clashing:
-            raise UsageError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")
-        out_dir, run = args.resume, command.resumed(args.resume, progress, args.workers, devices)
-    else:
-        out_dir, run = command.new_experiment(vars(args), args.approaches, args.out, args.name, args.overwrite,
-                                              progress, args.workers, devices, args.max_memory)
-    try:
-        summaries = run()
-    except CheckpointError as err:
-        raise UsageError(str(err)) from None
-    except NumericalFault as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 3
-    except Interrupted as err:
-        print(f"{err}; continue with: python train.py --resume {out_dir}", file=sys.stderr)
-        return 130
-    print(f"done in {time.perf_counter() - start:.0f} s -> {out_dir}/"
-          + ("  (figure: curves.png, tables: results.md)" if is_experiment_dir(out_dir) else ""))
-    for name, info in summaries.items():
-        print(command.report(name, info))
-    return 0
-
+    return command.main(args, devices)
 
 if __name__ == "__main__":
     sys.exit(run_main(main))

@@ -1,7 +1,9 @@
 """train.py's work once its flags are parsed: the config, the experiment directory, new or resumed runs."""
 from __future__ import annotations
 
+import os
 import sys
+import time
 from pathlib import Path
 from typing import Callable
 
@@ -50,8 +52,8 @@ def default_approaches(env_cls) -> list[str]:
 
 
 def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: str | None, overwrite: bool,
-                   progress: bool, workers: int | None, devices: list,
-                   max_memory: float | None = None) -> tuple[Path, Callable[[], dict]]:
+                   progress: bool, workers: int | None, devices: list, max_memory: float | None = None,
+                   interrupts=None) -> tuple[Path, Callable[[], dict]]:
     """(experiment directory, the training to run) of a new experiment; the directory is locked. A run
     whose memory estimate exceeds `max_memory` GiB (default: what is available) is refused first."""
     from jaxbridge.run import memory, rundir
@@ -76,10 +78,18 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
     except OSError as err:
         raise UsageError(f"cannot write experiment directory {out / (name or env_cls.name)}: {err.strerror}") from None
     return out_dir, _releasing(lock, lambda: train_approaches(config, approaches, out_dir, progress, workers=workers,
-                                                              devices=devices, replaced=replaced))
+                                                              devices=devices, replaced=replaced, **_watch(interrupts)))
 
 
-def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list) -> Callable[[], dict]:
+def check_resume_flags(flags: dict) -> None:
+    """--resume takes the saved config: refuse the flags that would set another."""
+    clashing = [f"--{flag.replace('_', '-')}" for flag in CONFIG_FLAGS if flags.get(flag) is not None]
+    clashing += [f"--{flag}" for flag in ("overwrite", "name", "approaches") if flags.get(flag)]
+    if clashing:
+        raise UsageError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")
+
+
+def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list, interrupts=None) -> Callable[[], dict]:
     """The training that continues the experiment (or one approach's run) in `run_dir`, locked."""
     from jaxbridge.learn.setup import make_setup
     from jaxbridge.run import rundir
@@ -93,14 +103,20 @@ def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list) -
             load_env(config.env)
             check_resumable(run_dir, approaches)
             run = lambda: train_approaches(config, approaches, run_dir, progress, resume=True, workers=workers,
-                                           devices=devices)
+                                           devices=devices, **_watch(interrupts))
         else:
             config = load_config(run_dir)
             setup = make_setup(config, load_env(config.env))
-            run = lambda: {config.approach: train(setup, run_dir, progress, resume=True, devices=devices)}
+            run = lambda: {config.approach: train(setup, run_dir, progress, resume=True, devices=devices,
+                                                  **_watch(interrupts))}
         return _releasing(rundir.RunLock(run_dir).acquire(), run)
     except (ValueError, CheckpointError, rundir.RunDirError) as err:
         raise UsageError(str(err)) from None
+
+
+def _watch(interrupts) -> dict:
+    """The stop/trained events of commands.interrupts.Interrupts, as keyword arguments of the runs."""
+    return {} if interrupts is None else {"stop": interrupts.stop, "trained": interrupts.trained}
 
 
 def _releasing(lock, run: Callable[[], dict]) -> Callable[[], dict]:
@@ -120,3 +136,60 @@ def report(name: str, info: dict) -> str:
     return (f"{name:>20}: mean test solve rate at the last cycle {info['mean_test_solve_rate_per_cycle'][-1]:.2f}; "
             f"smooth reward at cycle {info['cycles']}: {info['smooth_reward_final']['mean']:.3f}"
             + (f"; at cycle {last}: {at[str(last)]['mean']:.2f}" if last else "") + f" ({info['elapsed_s']:.0f} s)")
+
+
+EXIT_NUMERICAL, EXIT_CANNOT_WRITE = 3, 4
+
+
+def main(args, devices: list) -> int:
+    """train.py after its flags: start or resume, train with Ctrl-C as requests, report; the exit code."""
+    from jaxbridge.commands.interrupts import EXIT_INTERRUPTED, Interrupts, run_watched
+    from jaxbridge.run import checkpoint
+    from jaxbridge.run.experiments import is_experiment_dir
+    from jaxbridge.run.rundir import release_held
+    from jaxbridge.run.runner import Interrupted, NumericalFault
+    from jaxbridge.utils.files import WriteError
+
+    checkpoint.QUIET = not args.debug
+    start, progress = time.perf_counter(), not args.no_progress
+    interrupts = Interrupts(on_exit=release_held)
+    if args.resume is not None:
+        check_resume_flags(vars(args))
+        out_dir, run = args.resume, resumed(args.resume, progress, args.workers, devices, interrupts)
+    else:
+        out_dir, run = new_experiment(vars(args), args.approaches, args.out, args.name, args.overwrite, progress,
+                                      args.workers, devices, args.max_memory, interrupts)
+    try:
+        summaries = run_watched(run)
+    except checkpoint.CheckpointError as err:
+        raise UsageError(str(err)) from None
+    except NumericalFault as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_NUMERICAL
+    except Interrupted as err:
+        print(f"{err}; continue with: python train.py --resume {out_dir}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except WriteError as err:
+        if args.debug:
+            raise
+        print(f"error: {err}; stopped, {last_checkpoints(out_dir)}", file=sys.stderr, flush=True)
+        release_held()
+        os._exit(EXIT_CANNOT_WRITE)  # at once: orbax's unfinished writes would report at interpreter exit
+    finally:
+        interrupts.restore()
+    print(f"done in {time.perf_counter() - start:.0f} s -> {out_dir}/"
+          + ("  (figure: curves.png, tables: results.md)" if is_experiment_dir(out_dir) else ""))
+    for name, info in summaries.items():
+        print(report(name, info))
+    return 0
+
+
+def last_checkpoints(out_dir: Path) -> str:
+    """Where a stopped run can resume from, in words."""
+    from jaxbridge.run.checkpoint import sealed_steps
+
+    runs = [out_dir] if (out_dir / "checkpoints").is_dir() else sorted(p for p in out_dir.iterdir() if p.is_dir())
+    sealed = {run.name: sealed_steps(run / "checkpoints") for run in runs}
+    held = ", ".join(f"{name} cycle {steps[-1]}" for name, steps in sealed.items() if steps)
+    return (f"the last complete checkpoints are {held}; once it can write, continue with: python train.py --resume "
+            f"{out_dir}" if held else "before any checkpoint was complete")

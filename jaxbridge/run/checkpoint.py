@@ -7,9 +7,12 @@ cut short (a crash mid-save) and is skipped; a checkpoint whose files no longer 
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import os
 import shutil
+import sys
 import threading
 from pathlib import Path
 from typing import Any
@@ -18,7 +21,7 @@ import jax
 import orbax.checkpoint as ocp
 from orbax.checkpoint import checkpoint_managers
 
-from jaxbridge.utils.files import write_atomic
+from jaxbridge.utils.files import WriteError, write_atomic
 
 KEEP = 2
 
@@ -28,7 +31,10 @@ class CheckpointError(Exception):
 
 
 def _manager(directory: Path) -> ocp.CheckpointManager:
-    options = ocp.CheckpointManagerOptions(preservation_policy=checkpoint_managers.LatestN(n=KEEP), create=True)
+    # Synchronous saves: a failure (no space, read-only) raises here, in the saving thread, at once, and
+    # no background thread outlives it.
+    options = ocp.CheckpointManagerOptions(preservation_policy=checkpoint_managers.LatestN(n=KEEP), create=True,
+                                           enable_async_checkpointing=False)
     return ocp.CheckpointManager(Path(directory).absolute(), options=options)
 
 
@@ -47,8 +53,45 @@ _SAVING = threading.Lock()
 
 
 def save(directory: Path, step: int, state: Any, record: dict) -> None:
-    with _SAVING:
-        _save(Path(directory), step, state, record)
+    """Save and seal checkpoint `step`; WriteError (naming the directory) if the files cannot be written."""
+    directory = Path(directory)
+    with _SAVING, _quiet():
+        try:
+            _save(directory, step, state, record)
+        except (WriteError, CheckpointError):
+            raise
+        except Exception as err:  # noqa: BLE001 -- orbax wraps OS errors in ValueError and others
+            shutil.rmtree(directory / f"{step}.orbax-checkpoint-tmp", ignore_errors=True)
+            raise WriteError(directory / str(step), _reason(err)) from None
+
+
+QUIET = True  # orbax's and tensorstore's own reports of a failed save (tracebacks from their threads) go
+# to /dev/null; save raises one WriteError instead. train.py --debug shows them.
+
+
+@contextlib.contextmanager
+def _quiet():
+    if not QUIET:
+        yield
+        return
+    sys.stderr.flush()
+    saved, null = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 2)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(null)
+
+
+def _reason(err: Exception) -> str:
+    """The OS's words for a failed write, out of orbax's and tensorstore's long messages."""
+    text = str(err)
+    for words in ("No space left on device", "Read-only file system", "Permission denied", "Disk quota exceeded"):
+        if words in text:
+            return words
+    return text.splitlines()[0][:200] if text else type(err).__name__
 
 
 def _save(directory: Path, step: int, state: Any, record: dict) -> None:

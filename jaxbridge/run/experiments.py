@@ -23,7 +23,7 @@ from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint, comparison, rundir
 from jaxbridge.run.runner import Interrupted, train
-from jaxbridge.utils.files import write_atomic
+from jaxbridge.utils.files import WriteError, write_atomic
 
 EXPERIMENT_FILE = "experiment.json"
 # Seconds per approach in `python -m bench.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
@@ -69,12 +69,15 @@ def check_resumable(experiment_dir: Path, approaches: list[str]) -> None:
 
 def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
                      resume: bool = False, workers: int | None = None, devices: list | None = None,
-                     replaced: Path | None = None) -> dict[str, dict]:
+                     replaced: Path | None = None, stop: threading.Event | None = None,
+                     trained: threading.Event | None = None) -> dict[str, dict]:
     """Train every approach (run directory `experiment_dir/<approach>`), `workers` at a time, then write
     the comparison files (figure, results.md, results.csv), also after a fault or Ctrl-C for the
     approaches that have files. With `resume`, finished approaches are kept, started ones continue
     from their checkpoint and the others start. `replaced`: the run this one replaces, moved aside, deleted
-    once this one's experiment file is written. Returns each approach's summary, in list order."""
+    once this one's experiment file is written. `stop` (set by another thread) stops every approach after
+    its current cycle, checkpointed; `trained` is set after any cycle completes. Returns each approach's
+    summary, in list order."""
     if resume:
         check_resumable(experiment_dir, approaches)
     else:
@@ -85,7 +88,7 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
     env_cls = env_class(config.env)  # resolved once for every approach
     bar = tqdm(total=config.cycles * len(approaches), unit="cycle", disable=not progress, dynamic_ncols=True,
                desc=f"{config.env} x{config.num_seeds} seeds, {len(approaches)} approaches")
-    stop = threading.Event()
+    stop = stop or threading.Event()
     device_shares = queue.SimpleQueue()  # a worker takes a share of the devices per approach, then returns it
     for share in split_devices(devices, min(workers, len(approaches))):
         device_shares.put(share)
@@ -100,11 +103,11 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         share = device_shares.get()
         try:
             return train(make_setup(dataclasses.replace(config, approach=name), env_cls), run_dir, resume=started,
-                         bar=bar, stop=stop, devices=share)
+                         bar=bar, stop=stop, devices=share, trained=trained)
         finally:
             device_shares.put(share)
 
-    order = sorted(approaches, key=lambda a: -COST.get(a, 0))
+    order, unwritable = sorted(approaches, key=lambda a: -COST.get(a, 0)), False
     try:
         with ThreadPoolExecutor(workers, thread_name_prefix="approach") as pool:
             futures = {name: pool.submit(run, name) for name in order}
@@ -129,8 +132,11 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
                                if isinstance(futures[n].exception(), Interrupted))
             raise Interrupted(-1, f"interrupted; checkpoints saved ({cycles} cycles done)")
         return {name: futures[name].result() for name in approaches}
+    except WriteError:
+        unwritable = True
+        raise
     finally:
         bar.close()
         done = [a for a in approaches if (experiment_dir / a / "metrics.csv").is_file()]
-        if done:
+        if done and not unwritable:
             comparison.write_comparison(experiment_dir, config.env, [get_approach(a) for a in done])

@@ -97,6 +97,15 @@ def refuse_if_locked(run_dir: Path) -> None:
             raise _in_use(run_dir, holder)
 
 
+_HELD: set["RunLock"] = set()
+
+
+def release_held() -> None:
+    """Release every lock this process holds (before exiting without unwinding)."""
+    for lock in list(_HELD):
+        lock.release()
+
+
 class RunLock:
     """`run_dir/.lock`, created atomically with this process's pid and host. A lock whose process is gone
     is taken over with a warning; one held by a live process (or another host) is refused."""
@@ -119,9 +128,14 @@ class RunLock:
                 continue
             with os.fdopen(fd, "w") as f:
                 f.write(me + "\n")
+            _HELD.add(self)
             return self
 
     def release(self) -> None:
+        _HELD.discard(self)
         holder = _holder(self.path)
         if holder is not None and holder["pid"] == os.getpid():
-            self.path.unlink(missing_ok=True)
+            try:
+                self.path.unlink(missing_ok=True)
+            except OSError:
+                pass  # a read-only or vanished directory: the lock is stale from now on and will be taken over

@@ -18,7 +18,7 @@ from jaxbridge.learn.devices import SeedMesh, describe
 from jaxbridge.learn.online import Cycle, CycleMetrics
 from jaxbridge.learn.setup import Setup, make_setup
 from jaxbridge.run import artifacts, checkpoint
-from jaxbridge.utils.files import write_atomic
+from jaxbridge.utils.files import WriteError, write_atomic
 
 
 class Interrupted(Exception):
@@ -88,12 +88,13 @@ def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int)
 
 def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = False,
           fault_injection: Callable | None = None, bar: tqdm | None = None,
-          stop: threading.Event | None = None, devices: list | None = None) -> dict:
+          stop: threading.Event | None = None, devices: list | None = None,
+          trained: threading.Event | None = None) -> dict:
     """Run the cycles of `setup.config` (continuing the latest checkpoint with `resume`), writing the run
     files and checkpoints into `run_dir`. `fault_injection(cycle, learners) -> learners` lets tests
     corrupt the state before a cycle (seed i is slot i of the leading axis). `bar`: a progress bar
     shared with other runs (else its own). `stop`: when set (by another thread), checkpoint the last
-    completed cycle and raise Interrupted. `devices`: the seed axis is sharded over them (default: the
+    completed cycle and raise Interrupted; `trained` is set after each completed cycle. `devices`: the seed axis is sharded over them (default: the
     first local device); the numbers do not depend on them, and a run may resume on others."""
     start, config = time.perf_counter(), setup.config
     if resume:
@@ -120,7 +121,7 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
 
     # (learners, history) after the last completed cycle, replaced in one assignment so that Ctrl-C at
     # any point finds a consistent pair to checkpoint.
-    done = (learners, history)
+    done, unwritable = (learners, history), False
     own_bar = bar is None
     if own_bar:
         bar = tqdm(total=config.cycles, initial=len(history), desc=f"{config.env} x{config.num_seeds} seeds",
@@ -138,6 +139,8 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
             if message:
                 raise NumericalFault(message)
             done = (updated, [*done[1], metrics])
+            if trained is not None:
+                trained.set()
             shown = {} if own_bar else {"last": f"{config.approach} {c}"}
             bar.set_postfix(**shown, test=f"{metrics.test_solve_rate.mean():.2f}",
                             train=f"{metrics.train_success_rate.mean():.2f}", eps=f"{metrics.epsilon.mean():.2f}")
@@ -148,10 +151,13 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
         if len(done[1]) > last_saved:
             save(*done)
         raise Interrupted(len(done[1])) from None
+    except WriteError:
+        unwritable = True
+        raise
     finally:
         if own_bar:
             bar.close()
-        if done[1]:  # the files always describe the cycles completed so far
+        if done[1] and not unwritable:  # the files always describe the cycles completed so far
             artifacts.write_run_files(run_dir, config.to_dict(), done[1], config.seeds, elapsed(),
                                       label=setup.approach.label, devices=describe(seeds.devices))
     return artifacts.summary(done[1], config.seeds, elapsed(), describe(seeds.devices))
