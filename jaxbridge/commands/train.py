@@ -59,6 +59,11 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
     from jaxbridge.run import memory, rundir
     from jaxbridge.run.experiments import default_workers, train_approaches
 
+    if name is not None:
+        try:
+            rundir.check_name(name)
+        except rundir.RunDirError as err:
+            raise UsageError(str(err)) from None
     config, env_cls = make_config(flags)
     approaches = approaches or default_approaches(env_cls)
     try:
@@ -68,8 +73,6 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
         raise UsageError(str(err)) from None
     check_reachable(config, env_cls)
     try:
-        if name is not None:
-            rundir.check_name(name)
         out_dir = out / (name or env_cls.name)
         replaced = rundir.prepare(out_dir, overwrite)
         lock = rundir.RunLock(out_dir).acquire()

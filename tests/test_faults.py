@@ -1,0 +1,78 @@
+"""Faults during a run, with real signals and real filesystems: Ctrl-C once during start-up and three times
+during training, a full disk and a filesystem turned read-only (small tmpfs mounts, as root)."""
+import os
+import signal
+import subprocess
+import time
+
+import pytest
+from run_helpers import QUICK, one_line_error, start, train, wait_for
+
+from jaxbridge.run import checkpoint
+
+# ---- Ctrl-C, with real signals --------------------------------------------------------------------------
+def test_ctrl_c_during_start_up_exits_at_once_saying_nothing_was_trained(tmp_path):
+    proc = start(*QUICK, "--cycles", "5", "--out", str(tmp_path), "--name", "early")
+    wait_for(tmp_path / "early" / ".lock", proc)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "nothing was trained" in err and "Traceback" not in err
+    assert not (tmp_path / "early" / ".lock").exists()
+
+
+def test_three_ctrl_c_exit_130_without_corrupting_anything(tmp_path):
+    run = tmp_path / "t" / "ours"
+    proc = start("--approaches", "ours", "--num-seeds", "2", "--cycles", "40", "--updates-per-cycle", "20",
+                 "--checkpoint-every", "1", "--no-progress", "--out", str(tmp_path), "--name", "t")
+    wait_for(run / "checkpoints" / "2.sha256.json", proc)
+    for _ in range(3):
+        proc.send_signal(signal.SIGINT)
+        time.sleep(0.05)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "Traceback" not in err and "terminate" not in err, err
+    sealed = checkpoint.sealed_steps(run / "checkpoints")
+    assert sealed and all(checkpoint.read_record(run / "checkpoints", s)[1] == s for s in sealed)  # each verifies
+
+
+# ---- a full disk and a read-only filesystem -------------------------------------------------------------
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 400 KB tmpfs at tmp_path/disk (mounting needs root, else the test is skipped)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if os.geteuid() != 0:
+        pytest.skip("mounting a small tmpfs needs root")
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=400k", "tmpfs", str(disk)], capture_output=True).returncode:
+        pytest.skip("this machine does not allow mounting a tmpfs")
+    yield disk
+    subprocess.run(["umount", "-l", str(disk)], capture_output=True)
+
+
+LEARNING = ["--approaches", "ours", "--num-seeds", "2", "--updates-per-cycle", "50", "--checkpoint-every", "2",
+            "--no-progress"]
+
+
+def test_a_full_disk_stops_the_run_in_one_line_naming_the_last_checkpoint(small_disk, tmp_path):
+    proc = train(*LEARNING, "--cycles", "40", "--out", str(small_disk), "--name", "full", timeout=300)
+    one_line_error(proc, 4, "No space left on device", "the last complete checkpoints are ours cycle",
+                   f"--resume {small_disk / 'full'}")
+    last = checkpoint.sealed_steps(small_disk / "full" / "ours" / "checkpoints")
+    assert last and f"ours cycle {last[-1]};" in proc.stderr
+
+
+def test_a_filesystem_turned_read_only_stops_the_run_in_one_line(small_disk):
+    subprocess.run(["mount", "-o", "remount,size=20m", str(small_disk)], check=True)
+    run = small_disk / "ro" / "ours"
+    proc = start(*LEARNING, "--cycles", "60", "--out", str(small_disk), "--name", "ro")
+    try:
+        wait_for(run / "checkpoints" / "4.sha256.json", proc)
+        subprocess.run(["mount", "-o", "remount,ro", str(small_disk)], check=True)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+        subprocess.run(["mount", "-o", "remount,rw", str(small_disk)], capture_output=True)
+    one_line_error(subprocess.CompletedProcess(proc.args, proc.returncode, "", err), 4, "Read-only file system",
+                   "the last complete checkpoints are ours cycle")
+    sealed = checkpoint.sealed_steps(run / "checkpoints")
+    assert sealed and f"ours cycle {sealed[-1]};" in err
+    checkpoint.verify(run / "checkpoints", sealed[-1])  # what --resume will load is whole
