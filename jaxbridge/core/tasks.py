@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import jax
 import jax.numpy as jnp
@@ -50,13 +50,16 @@ class TaskBatch:
 
 
 def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizons: list[int] | None = None,
-               env: NoveltyEnv | None = None) -> TaskBatch:
-    """Pad and compile `specs` (test horizons by default) for an env sized to fit them all."""
+               env: NoveltyEnv | None = None, progress: Callable[[int, int], None] | None = None) -> TaskBatch:
+    """Pad and compile `specs` (test horizons by default) for an env sized to fit them all; `progress(done,
+    total)` after each spec compiled."""
     env = env or env_cls.for_tasks(specs)
     once: dict = {}  # repeated specs (a seed's training task, once per episode) share one compilation
-    for spec in specs:
+    for i, spec in enumerate(specs):
         if spec not in once:
             once[spec] = compile_task(env, spec)
+        if progress is not None:
+            progress(i + 1, len(specs))
     compiled = [once[spec] for spec in specs]
     horizons = [s.horizon for s in specs] if horizons is None else horizons
     arrays = TaskArrays(tasks=env.stack_tasks(specs), tables=stack_tables(compiled),
@@ -64,11 +67,12 @@ def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizon
     return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(seeds), compiled=compiled, arrays=arrays)
 
 
-def evaluation_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10) -> TaskBatch:
+def evaluation_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10,
+                     progress: Callable[[int, int], None] | None = None) -> TaskBatch:
     """Every seed's test tasks in one batch (seed-major order)."""
     specs, owners = [], []
     for seed in seeds:
         tasks = env_cls.test_tasks(seed, num_tasks)
         specs += tasks
         owners += [seed] * len(tasks)
-    return make_batch(env_cls, specs, owners)
+    return make_batch(env_cls, specs, owners, progress=progress)

@@ -15,6 +15,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.dqn import DQN, Learner, init_learner, make_dqn
+from jaxbridge.utils.progress import SlowWork
 
 
 @dataclass(frozen=True)
@@ -66,8 +67,10 @@ def _build_tasks(env_cls: type[NoveltyEnv], seeds: tuple[int, ...], episodes: in
                  num_test_tasks: int) -> tuple[TaskBatch, TaskBatch]:
     train_specs = [env_cls.train_task(s) for s in seeds for _ in range(episodes)]
     train_owner = [s for s in seeds for _ in range(episodes)]
-    train = make_batch(env_cls, train_specs, train_owner, horizons=[train_steps] * len(train_specs))
-    return train, evaluation_batch(env_cls, list(seeds), num_test_tasks)
+    train = make_batch(env_cls, train_specs, train_owner, horizons=[train_steps] * len(train_specs),
+                       progress=SlowWork(f"{env_cls.name}: training tasks and plan tables"))
+    return train, evaluation_batch(env_cls, list(seeds), num_test_tasks,
+                                   progress=SlowWork(f"{env_cls.name}: test tasks and plan tables"))
 
 
 def task_batches(setup: Setup) -> tuple[TaskBatch, TaskBatch]:
