@@ -11,6 +11,8 @@ from pathlib import Path
 import pytest
 from run_helpers import QUICK, ROOT, one_line_error, snapshot, start, train, wait_for
 
+from jaxbridge.run import rundir
+
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory) -> Path:
     """A finished small experiment (pure planning, 1 seed, 2 cycles); tests work on copies of it."""
@@ -33,9 +35,11 @@ def test_overwrite_replaces_only_runs_and_names_stay_inside_out(finished, tmp_pa
     before = snapshot(tmp_path)
     one_line_error(train(*QUICK, "--cycles", "1", "--out", str(tmp_path), "--name", "precious", "--overwrite"), 2,
                    "is not a run directory of train.py", "left untouched")
-    for name in ("..", ".", "a/b", ""):
-        one_line_error(train(*QUICK, "--cycles", "1", "--out", str(tmp_path / "runs"), "--name", name, "--overwrite"),
-                       2, "--name must be a plain directory name")
+    one_line_error(train(*QUICK, "--cycles", "1", "--out", str(tmp_path / "runs"), "--name", "..", "--overwrite"),
+                   2, "--name must be a plain directory name")
+    for name in (".", "a/b", "", "/abs"):  # the same check, in this process
+        with pytest.raises(rundir.RunDirError, match="--name must be a plain directory name"):
+            rundir.check_name(name)
     assert snapshot(tmp_path) == before
 
     run = copy_of(finished, tmp_path, "run")
