@@ -1,5 +1,6 @@
 """Faults during a run, with real signals and real filesystems: Ctrl-C once during start-up and three times
-during training, a full disk and a filesystem turned read-only (small tmpfs mounts, as root)."""
+during training, a full disk and a filesystem turned read-only (small tmpfs mounts, as root). Pure planning runs: the same
+runner and checkpoints as learning ones, compiled faster."""
 import os
 import signal
 import subprocess
@@ -21,9 +22,9 @@ def test_ctrl_c_during_start_up_exits_at_once_saying_nothing_was_trained(tmp_pat
 
 
 def test_three_ctrl_c_exit_130_without_corrupting_anything(tmp_path):
-    run = tmp_path / "t" / "ours"
-    proc = start("--approaches", "ours", "--num-seeds", "2", "--cycles", "40", "--updates-per-cycle", "20",
-                 "--checkpoint-every", "1", "--no-progress", "--out", str(tmp_path), "--name", "t")
+    run = tmp_path / "t" / "pure_planning"
+    proc = start("--approaches", "pure_planning", "--num-seeds", "2", "--cycles", "1000", "--checkpoint-every", "1",
+                 "--no-progress", "--out", str(tmp_path), "--name", "t")
     wait_for(run / "checkpoints" / "2.sha256.json", proc)
     for _ in range(3):
         proc.send_signal(signal.SIGINT)
@@ -48,21 +49,20 @@ def small_disk(tmp_path):
     subprocess.run(["umount", "-l", str(disk)], capture_output=True)
 
 
-LEARNING = ["--approaches", "ours", "--num-seeds", "2", "--updates-per-cycle", "50", "--checkpoint-every", "2",
-            "--no-progress"]
+LEARNING = ["--approaches", "pure_planning", "--num-seeds", "2", "--checkpoint-every", "2", "--no-progress"]
 
 
 def test_a_full_disk_stops_the_run_in_one_line_naming_the_last_checkpoint(small_disk, tmp_path):
     proc = train(*LEARNING, "--cycles", "40", "--out", str(small_disk), "--name", "full", timeout=300)
-    one_line_error(proc, 4, "No space left on device", "the last complete checkpoints are ours cycle",
+    one_line_error(proc, 4, "No space left on device", "the last complete checkpoints are pure_planning cycle",
                    f"--resume {small_disk / 'full'}")
-    last = checkpoint.sealed_steps(small_disk / "full" / "ours" / "checkpoints")
-    assert last and f"ours cycle {last[-1]};" in proc.stderr
+    last = checkpoint.sealed_steps(small_disk / "full" / "pure_planning" / "checkpoints")
+    assert last and f"pure_planning cycle {last[-1]};" in proc.stderr
 
 
 def test_a_filesystem_turned_read_only_stops_the_run_in_one_line(small_disk):
     subprocess.run(["mount", "-o", "remount,size=20m", str(small_disk)], check=True)
-    run = small_disk / "ro" / "ours"
+    run = small_disk / "ro" / "pure_planning"
     proc = start(*LEARNING, "--cycles", "60", "--out", str(small_disk), "--name", "ro")
     try:
         wait_for(run / "checkpoints" / "4.sha256.json", proc)
@@ -72,7 +72,7 @@ def test_a_filesystem_turned_read_only_stops_the_run_in_one_line(small_disk):
         proc.kill()
         subprocess.run(["mount", "-o", "remount,rw", str(small_disk)], capture_output=True)
     one_line_error(subprocess.CompletedProcess(proc.args, proc.returncode, "", err), 4, "Read-only file system",
-                   "the last complete checkpoints are ours cycle")
+                   "the last complete checkpoints are pure_planning cycle")
     sealed = checkpoint.sealed_steps(run / "checkpoints")
-    assert sealed and f"ours cycle {sealed[-1]};" in err
+    assert sealed and f"pure_planning cycle {sealed[-1]};" in err
     checkpoint.verify(run / "checkpoints", sealed[-1])  # what --resume will load is whole
