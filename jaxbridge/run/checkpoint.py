@@ -61,8 +61,11 @@ def save(directory: Path, step: int, state: Any, record: dict) -> None:
         except (WriteError, CheckpointError):
             raise
         except Exception as err:  # noqa: BLE001 -- orbax wraps OS errors in ValueError and others
+            reason = _write_failure(err)
+            if reason is None:  # not a failed write (a bug, a state that does not fit): as it is
+                raise
             shutil.rmtree(directory / f"{step}.orbax-checkpoint-tmp", ignore_errors=True)
-            raise WriteError(directory / str(step), _reason(err)) from None
+            raise WriteError(directory / str(step), reason) from None
 
 
 QUIET = True  # orbax's and tensorstore's own reports of a failed save (tracebacks from their threads) go
@@ -85,13 +88,16 @@ def _quiet():
         os.close(null)
 
 
-def _reason(err: Exception) -> str:
-    """The OS's words for a failed write, out of orbax's and tensorstore's long messages."""
+def _write_failure(err: Exception) -> str | None:
+    """The OS's words for a failed write, out of orbax's and tensorstore's long messages; None when `err`
+    is no failed write."""
     text = str(err)
     for words in ("No space left on device", "Read-only file system", "Permission denied", "Disk quota exceeded"):
         if words in text:
             return words
-    return text.splitlines()[0][:200] if text else type(err).__name__
+    if isinstance(err, OSError):
+        return err.strerror or text
+    return text.splitlines()[0][:200] if "os_error_code" in text else None
 
 
 def _save(directory: Path, step: int, state: Any, record: dict) -> None:
