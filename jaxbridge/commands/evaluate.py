@@ -19,9 +19,6 @@ from jaxbridge.run.runner import load_config
 from jaxbridge.run.sweep import evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
 from jaxbridge.utils.cli import UsageError
 from jaxbridge.utils.files import write_atomic
-from jaxbridge.viz.animate import render_gif
-from jaxbridge.viz.episodes import pick_episode
-from jaxbridge.viz.render import drawer_for, render_episode, trace_episodes
 
 SWEEP_TASKS = 10
 BRIDGE_LABELS = {"oracle": "oracle bridge", "random": "random bridge", "none": "pure planning"}
@@ -48,6 +45,10 @@ def check_render_task(args, num_tasks: int) -> None:
 
 def render(args, batch, bridge, bridge_params, controls, result, label: str) -> None:
     """Re-run the chosen evaluated episode with recording on; draw it to args.render, animate it to args.gif."""
+    from jaxbridge.viz.animate import render_gif  # matplotlib and PIL: only when drawing
+    from jaxbridge.viz.episodes import pick_episode
+    from jaxbridge.viz.render import drawer_for, render_episode, trace_episodes
+
     try:
         drawer = drawer_for(batch.env)
     except ValueError as err:
