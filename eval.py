@@ -23,7 +23,7 @@ from pathlib import Path
 from jaxbridge.commands import evaluate
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.utils import compile_cache
-from jaxbridge.utils.cli import ArgumentParser, non_negative_int, positive_int, run_main
+from jaxbridge.utils.cli import ArgumentParser, non_negative_int, positive_float, positive_int, run_main
 
 
 def parse_args(argv):
@@ -75,6 +75,9 @@ def parse_args(argv):
                              "(with 10 tasks per seed, K = 23 is the third seed's task 3); default: the solved task "
                              "of the first seed on which the bridge opened the most doors (the first of those; "
                              "task 0 if none is solved)")
+    parser.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
+                        help="refuse an evaluation whose plan tables are estimated to exceed this many GiB "
+                             "(default: the memory available when it starts)")
     parser.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return parser.parse_args(argv)
 

@@ -160,6 +160,12 @@ class NoveltyEnv(abc.ABC):
     def planner_problem(self, spec: TaskSpec) -> Any:
         """The planner's STRIPS problem (planner.Problem over `domain`) for the spec."""
 
+    def plan_bound(self, spec: TaskSpec) -> tuple[int, int] | None:
+        """Upper bounds (abstract states the planner's model reaches from the spec's start, its ground
+        operators) when the env knows them without grounding; lets eval.py refuse a task whose plan table
+        cannot fit before building it. None: the estimate grounds one task to count them."""
+        return None
+
     @property
     @abc.abstractmethod
     def num_atoms(self) -> int:

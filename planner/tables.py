@@ -65,6 +65,19 @@ class PlanTable:
     op_valid: jax.Array  # bool[O]
 
 
+def table_shape(states: int, operators: int, num_atoms: int) -> PlanTable:
+    """The shapes and dtypes of a PlanTable with `states` rows and `operators` ground operators, without
+    building one (memory estimates)."""
+    words = num_words(num_atoms)
+    shaped = lambda shape, dtype: jax.ShapeDtypeStruct(shape, dtype)
+    return PlanTable(
+        uid=shaped((), np.int32), goal_key=shaped((words,), np.uint32),
+        state_keys=shaped((states, words), np.uint32), state_valid=shaped((states,), np.bool_),
+        next_op=shaped((states,), np.int32), next_keys=shaped((states, words), np.uint32),
+        op_pre=shaped((operators, words), np.uint32), op_skill=shaped((operators,), np.int32),
+        op_slot=shaped((operators,), np.int32), op_valid=shaped((operators,), np.bool_))
+
+
 @struct.dataclass
 class PlanLookup:
     found: jax.Array  # bool: the state was answered (table or host)

@@ -33,4 +33,10 @@ class FloatGoal(LockedBox):
         return state.box_open.astype(jnp.float32)
 
 
+class SmallPlanBound(LockedBox):
+    """Claims a plan table smaller than its planner builds (memory estimates would be too low)."""
+    def plan_bound(self, spec):
+        return 1, 1
+
+
 NotAnEnv = object

@@ -138,3 +138,22 @@ def test_grounding_prunes_by_static_preconditions_without_changing_the_operators
         problem = env.planner_problem(spec)
         ops = [(op.name, op.args, op.pre, op.add, op.delete) for op in ground(problem)]
         assert ops == brute_force(problem) and len(ops) > 5
+
+
+def test_table_shape_states_the_layout_compile_task_builds():
+    """Memory estimates read table_shape; it must match a real table field for field."""
+    from planner.tables import table_shape
+    for env, spec in ((ENV, lsd.test_tasks(3, 1)[0]), (Doorknobs(4), doorknobs_maps.sample_task(np.random.default_rng(2), 4)),
+                      (Coffee(), Coffee.test_tasks(1, 4)[3])):
+        compiled = compile_task(env, spec)
+        shape = table_shape(compiled.num_reachable, len(compiled.ground_ops), env.num_atoms)
+        real = jax.tree.map(lambda x: (np.shape(x), np.asarray(x).dtype), compiled.table)
+        assert jax.tree.map(lambda x: (x.shape, x.dtype), shape) == real
+
+
+def test_light_switch_door_plan_bound_is_what_the_planner_finds():
+    """eval.py refuses too large LSD tasks from plan_bound alone, before grounding: it must hold."""
+    for spec in [lsd.sized_task(np.random.default_rng(s), n, d) for s, (n, d) in enumerate([(5, 1), (30, 5), (200, 3)])]:
+        env = lsd.LightSwitchDoor(spec.num_cells, len(spec.door_cells))
+        compiled = compile_task(env, spec)
+        assert env.plan_bound(spec) == (compiled.num_reachable, len(compiled.ground_ops))

@@ -105,6 +105,19 @@ def test_a_run_too_big_for_memory_is_refused_with_its_estimate(tmp_path):
     assert not any(tmp_path.iterdir())  # refused before anything was written
 
 
+def test_an_evaluation_too_big_for_memory_is_refused_with_its_estimate(finished):
+    """Light Switch Door's plan tables grow with cells squared: 100000 cells is ~37 GiB per task, refused
+    from the env's plan_bound before anything is grounded; Coffee has no bound, so its first task is."""
+    evaluate = lambda *args: subprocess.run([sys.executable, "eval.py", str(finished), "--approach", "pure_planning", *args], cwd=ROOT,
+                                            capture_output=True, text=True, timeout=600)
+    one_line_error(evaluate("--task-size", "cells=100000,doors=1"), 2, "evaluating these 10 tasks needs about",
+                   "plan tables of 200000 states x 400000 operators), more than the", "GiB available; lower --task-size")
+    one_line_error(evaluate("--task-size", "cells=40,doors=2", "--max-memory", "0.5"), 2, "allowed by --max-memory")
+    proc = subprocess.run([sys.executable, "eval.py", "--env", "coffee", "--num-seeds", "3", "--max-memory", "0.5"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+    one_line_error(proc, 2, "evaluating these 30 tasks needs about")
+
+
 def test_bad_flags_are_one_line_with_a_pointer_to_help():
     one_line_error(train("--num-seeds", "0"), 2, "train.py: error: argument --num-seeds: expected a positive integer",
                    "(see train.py --help)")

@@ -199,6 +199,11 @@ class LightSwitchDoor(NoveltyEnv):
         init = frozenset({("RobotInCell", "robby", "cell0"), ("LightOff", "light")})
         return Problem(DOMAIN, objects, static, init, frozenset({("LightOn", "light")}))
 
+    def plan_bound(self, spec: LightSwitchDoorTask) -> tuple[int, int]:
+        # States: the robot's cell x the light on or off. Operators: MoveRobot both ways along the row,
+        # TurnOnLight and TurnOffLight in the light's cell, MoveKey and TurnKey in every cell.
+        return 2 * spec.num_cells, 2 * (spec.num_cells - 1) + 2 + 2 * spec.num_cells
+
     @property
     def num_atoms(self) -> int:
         return self.max_cells + 2  # RobotInCell(robby, cell_i) for every cell slot, LightOn, LightOff

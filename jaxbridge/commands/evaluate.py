@@ -11,14 +11,16 @@ import numpy as np
 from jaxbridge.commands.envs import load_env
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import Controls
-from jaxbridge.core.tasks import evaluation_batch
+from jaxbridge.core.tasks import evaluation_specs, make_batch
 from jaxbridge.learn.approaches import APPROACHES, get_approach
 from jaxbridge.run.checkpoint import CheckpointError
+from jaxbridge.run.memory import TooBig, check_evaluation
 from jaxbridge.run.evaluate import evaluate_run, format_comparison, format_table, load_policy, run_bridge, summarise
 from jaxbridge.run.runner import load_config
 from jaxbridge.run.sweep import evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
 from jaxbridge.utils.cli import UsageError
 from jaxbridge.utils.files import write_atomic
+from jaxbridge.utils.progress import SlowWork
 
 SWEEP_TASKS = 10
 BRIDGE_LABELS = {"oracle": "oracle bridge", "random": "random bridge", "none": "pure planning"}
@@ -128,13 +130,18 @@ def sized_tasks(sizes: dict[str, int] | None, env_cls):
     return lambda rng: env_cls.sized_task(rng, **sizes)
 
 
+def max_memory_bytes(args) -> int | None:
+    return None if args.max_memory is None else int(args.max_memory * 2**30)
+
+
 def evaluate(args, run: Path):
     """evaluate_run with its errors as usage errors, and a header line."""
     sized = sized_tasks(args.task_size, run_env(run))
     start = time.perf_counter()
     try:
-        config, step, batch, result, policy = evaluate_run(run, sized, args.num_tasks, args.rollout_seed)
-    except (CheckpointError, ValueError) as err:
+        config, step, batch, result, policy = evaluate_run(run, sized, args.num_tasks, args.rollout_seed,
+                                                           max_memory_bytes(args))
+    except (CheckpointError, ValueError, TooBig) as err:
         raise UsageError(str(err)) from None
     what = (f"{args.num_tasks} tasks per seed of " + ", ".join(f"{k} {v}" for k, v in args.task_size.items())
             if sized else "test tasks")
@@ -239,7 +246,12 @@ def run(args) -> int:
     env_cls = load_env(args.env)
     seeds = list(range(args.first_seed, args.first_seed + args.num_seeds))
     start = time.perf_counter()
-    batch = evaluation_batch(env_cls, seeds, args.num_tasks)
+    specs, owners = evaluation_specs(env_cls, seeds, args.num_tasks)
+    try:
+        check_evaluation(env_cls, specs, max_memory_bytes(args))
+    except TooBig as err:
+        raise UsageError(str(err)) from None
+    batch = make_batch(env_cls, specs, owners, progress=SlowWork(f"{env_cls.name}: test tasks and plan tables"))
     check_render_task(args, batch.size)
     try:
         bridge = make_bridge(args.bridge, batch.env)

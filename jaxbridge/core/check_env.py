@@ -115,6 +115,11 @@ def _check_planner(env: NoveltyEnv, spec: Any) -> None:
         _expect(isinstance(index, (int, np.integer)) and 0 <= index < env.num_atoms, f"{name}.atom_index({atom})",
                 f"an int in [0, num_atoms = {env.num_atoms})", repr(index))
     compiled = _calls(f"{name}: grounding the planner's model and building its plan table", compile_task, env, spec)
+    bound = _calls(f"{name}.plan_bound", env.plan_bound, spec)
+    if bound is not None:
+        reached = (compiled.num_reachable, len(compiled.ground_ops))
+        _expect(len(bound) == 2 and all(b >= r for b, r in zip(bound, reached)), f"{name}.plan_bound",
+                f"(states, operators) at least the {reached} the planner found", repr(bound))
     initial = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec)))
     packed = np.asarray(pack_atoms(_calls(f"{name}.abstract", env.abstract, initial)))
     expected = np.asarray(compiled.table.state_keys[0])  # row 0: the model's initial state

@@ -67,12 +67,17 @@ def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizon
     return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(seeds), compiled=compiled, arrays=arrays)
 
 
-def evaluation_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10,
-                     progress: Callable[[int, int], None] | None = None) -> TaskBatch:
-    """Every seed's test tasks in one batch (seed-major order)."""
+def evaluation_specs(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10) -> tuple[list, list[int]]:
+    """Every seed's test tasks (seed-major order) and the seed each belongs to."""
     specs, owners = [], []
     for seed in seeds:
         tasks = env_cls.test_tasks(seed, num_tasks)
         specs += tasks
         owners += [seed] * len(tasks)
-    return make_batch(env_cls, specs, owners, progress=progress)
+    return specs, owners
+
+
+def evaluation_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10,
+                     progress: Callable[[int, int], None] | None = None) -> TaskBatch:
+    """Every seed's test tasks in one batch (seed-major order)."""
+    return make_batch(env_cls, *evaluation_specs(env_cls, seeds, num_tasks), progress=progress)

@@ -15,7 +15,9 @@ from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.learn.approaches import Approach
 from jaxbridge.learn.online import episode_params
 from jaxbridge.learn.setup import Setup
+from jaxbridge.run.memory import check_evaluation
 from jaxbridge.run.runner import load_learners
+from jaxbridge.utils.progress import SlowWork
 
 
 @dataclass
@@ -124,9 +126,10 @@ def load_policy(run_dir) -> TrainedPolicy:
     return TrainedPolicy(setup, step, learners)
 
 
-def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
+def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0, max_memory: int | None = None):
     """Greedy evaluation of a run's latest checkpoint on each seed's test tasks, or on tasks drawn by
-    `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed). Also returns the greedy
+    `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed; refused with TooBig if
+    their plan tables would exceed `max_memory` bytes or the memory available). Also returns the greedy
     policy it ran, (bridge, per-episode params, controls), so an episode can be re-run and drawn."""
     policy = load_policy(run_dir)
     config, env_cls = policy.config, policy.setup.env_cls
@@ -138,8 +141,10 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0):
             rng = np.random.default_rng(s + 20000)
             specs += [sized_specs(rng) for _ in range(num_tasks)]
             owners += [s] * num_tasks
+        check_evaluation(env_cls, specs, max_memory)
         sweep = env_cls.novelty_sweep  # its horizon rule scales with the tasks' size
-        batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None)
+        batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None,
+                           progress=SlowWork(f"{env_cls.name}: sized tasks and plan tables"))
     bridge, greedy, controls = policy.on(batch)
     result = run_bridge(batch, bridge, greedy, seed, controls)
     return config, policy.step, batch, result, (bridge, greedy, controls)

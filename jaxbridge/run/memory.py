@@ -12,11 +12,16 @@ from envs_jax import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.tasks import make_batch
 from jaxbridge.learn.setup import make_setup
+from planner.tables import compile_task, table_shape
 
 # A seed's learner state lives three times at once: the state a cycle reads (kept as the last good one),
 # the state it returns, and the host copy a checkpoint writes.
 STATE_COPIES = 3
 RUNTIME_BYTES = 1 << 30  # JAX, XLA's compiled programs and Python, before any seed
+# An evaluated task's plan table lives about four times at once: the compiled table each task keeps on
+# the host, the padded stack, its device copy, and the host planner's cache plus the rollout's compare
+# against every row.
+TABLE_COPIES = 4
 
 
 class TooBig(Exception):
@@ -56,12 +61,15 @@ def task_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
     return tree_bytes(make_batch(env_cls, specs, [seed] * len(specs)).arrays)
 
 
+def limit_bytes(limit: int | None) -> tuple[int, str]:
+    return (available_bytes(), "available") if limit is None else (limit, "allowed by --max-memory")
+
+
 def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], approaches: list[str], workers: int,
                    limit: int | None = None) -> int:
     """The estimate for `approaches` trained `workers` at a time (the largest together); TooBig if it
     exceeds `limit` bytes (default: the memory available now)."""
-    what = "available" if limit is None else "allowed by --max-memory"
-    limit = available_bytes() if limit is None else limit
+    limit, what = limit_bytes(limit)
     states = sorted((state_bytes(dataclasses.replace(config, approach=a), env_cls) for a in approaches), reverse=True)
     per_seed = STATE_COPIES * sum(states[:max(1, workers)]) + task_bytes(config, env_cls)
     need = RUNTIME_BYTES + config.num_seeds * per_seed
@@ -71,4 +79,25 @@ def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], approaches: l
                      f"{', '.join(approaches) if len(approaches) <= 2 else f'{workers} approaches at a time'}, "
                      f"x {config.num_seeds} seeds), more than the {limit / 2**30:.1f} GiB {what}; lower --num-seeds (about {fit} fit)"
                      f"{', --workers' if workers > 1 else ''} or --approaches, or raise --max-memory")
+    return need
+
+
+def check_evaluation(env_cls: type[NoveltyEnv], specs: list, limit: int | None = None) -> int:
+    """The estimate for evaluating `specs` in one batch: their plan tables, padded to the largest (the
+    env's `plan_bound`, else the first task's grounding); TooBig if it exceeds `limit` bytes."""
+    limit, what = limit_bytes(limit)
+    env = env_cls.for_tasks(specs)
+    bounds = [env.plan_bound(spec) for spec in specs]
+    if any(b is None for b in bounds):
+        first = compile_task(env, specs[0])
+        bounds = [(first.num_reachable, len(first.ground_ops))]
+    states, operators = (max(b[i] for b in bounds) for i in range(2))
+    per_task = TABLE_COPIES * tree_bytes(table_shape(states, operators, env.num_atoms))
+    need = RUNTIME_BYTES + len(specs) * per_task
+    if need > limit:
+        fit = max(0, (limit - RUNTIME_BYTES) // per_task)
+        raise TooBig(f"evaluating these {len(specs)} tasks needs about {need / 2**30:.1f} GiB ({per_task / 2**20:.1f} MiB "
+                     f"per task for plan tables of {states} states x {operators} operators), more than the "
+                     f"{limit / 2**30:.1f} GiB {what}; lower --task-size or --num-tasks (about {fit} tasks fit), "
+                     f"or raise --max-memory")
     return need
