@@ -4,7 +4,8 @@
     python -m bench.update_parts [--env light_switch_door] [--approaches ours,no_feature_selection,maple_q]
                                  [--fill 16384] [--updates 1000]
 
-Parts (each jitted alone, over --updates iterations, after a compiling call): the minibatch draws
+The full-state ablations are measured twice, with their task-constant entries split off (the default,
+`split_task_state`) and whole. Parts (each jitted alone, over --updates iterations, after a compiling call): the minibatch draws
 (`minibatch_indices`, all updates at once), gathering and encoding a minibatch, the forward and backward
 pass on a fixed minibatch, clip + Adam, the polyak step; and the per-cycle relabelling of the buffer
 (whole, in ms). The parts do not add up to the whole exactly: XLA fuses across them in `learn`.
@@ -21,7 +22,8 @@ import optax
 from jaxbridge.learn import dqn
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
-from jaxbridge.learn.q_bridge import encode
+from jaxbridge.learn.approaches import get_approach
+from jaxbridge.learn.q_bridge import batch_input
 
 
 def _seconds(fn, arg) -> float:
@@ -32,16 +34,20 @@ def _seconds(fn, arg) -> float:
     return time.perf_counter() - start
 
 
-def measure(env_name: str, approach: str, fill: int, updates: int) -> dict:
-    config = TrainConfig.for_env(env_name, approach=approach, num_seeds=1, updates_per_cycle=updates)
+def measure(env_name: str, approach: str, fill: int, updates: int, split: bool = True) -> dict:
+    config = TrainConfig.for_env(env_name, approach=approach, num_seeds=1, updates_per_cycle=updates,
+                                 split_task_state=split)
     setup = make_setup(config)
     env, learning = setup.train_env, setup.dqn
+    tasks = setup.train.arrays.tasks  # the seed's training tasks, which a split buffer's `task` indexes
+    task = learning.task_part(tasks)
     learner = jax.tree.map(lambda x: x[0], setup.init_learners())
     learner = learner.replace(buffer=learner.buffer.replace(size=jnp.int32(fill)))  # zeros: timing only
     net, optimizer = learning.net, learning.optimizer
     _, indices = dqn.minibatch_indices(config, learner)
     batch = jax.tree.map(lambda d: d[indices[0]], learner.buffer.data)
-    inputs = encode(env, batch.features, batch.skill, batch.param)
+    of = lambda b: None if task is None else task.replace(index=b.task)
+    inputs = batch_input(env, batch.features, batch.skill, batch.param, of(batch))
 
     def repeat(step):  # `updates` iterations of step(carry) in a scan
         return lambda carry: jax.lax.scan(lambda c, _: (step(c), None), carry, None, length=updates)[0]
@@ -49,7 +55,8 @@ def measure(env_name: str, approach: str, fill: int, updates: int) -> dict:
     def gather_encode(total):
         def one(total, index):
             b = jax.tree.map(lambda d: d[index], learner.buffer.data)
-            return total + encode(env, b.features, b.skill, b.param).sum(), None
+            encoded = batch_input(env, b.features, b.skill, b.param, of(b))
+            return total + sum(x.sum() for x in jax.tree.leaves(encoded)), None
         return jax.lax.scan(one, total, indices)[0]
 
     def forward_backward(params):
@@ -63,9 +70,9 @@ def measure(env_name: str, approach: str, fill: int, updates: int) -> dict:
 
     per_update = lambda s: 1e6 * s / updates
     return {
-        "input": inputs.shape[-1],
-        "learn_us": per_update(_seconds(lambda l: dqn.learn(learning, l, jnp.int32(0)), learner)),
-        "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(learning, l, l.key), learner),
+        "input": learning.stored_features,
+        "learn_us": per_update(_seconds(lambda l: dqn.learn(learning, l, jnp.int32(0), tasks), learner)),
+        "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(learning, l, l.key, task), learner),
         "draws_us": per_update(_seconds(lambda l: dqn.minibatch_indices(config, l), learner)),
         "gather_encode_us": per_update(_seconds(gather_encode, jnp.float32(0))),
         "forward_backward_us": per_update(_seconds(repeat(forward_backward), learner.params)),
@@ -90,9 +97,13 @@ def main() -> None:
     print("| approach | " + " | ".join(columns) + " |")
     print("|---" * (len(columns) + 1) + "|")
     for approach in args.approaches.split(","):
-        row = measure(args.env, approach, args.fill, args.updates)
-        print(f"| {approach} | " + " | ".join(f"{row[c]:.1f}" if c != "input" else str(row[c]) for c in columns)
-              + " |", flush=True)
+        # The full-state ablations twice: their task-constant entries split off (the default), and whole.
+        splits = (True, False) if get_approach(approach).controls.full_state else (True,)
+        for split in splits:
+            row = measure(args.env, approach, args.fill, args.updates, split)
+            label = approach + ("" if len(splits) == 1 else " (split)" if split else " (whole)")
+            print(f"| {label} | " + " | ".join(f"{row[c]:.1f}" if c != "input" else str(row[c]) for c in columns)
+                  + " |", flush=True)
 
 
 if __name__ == "__main__":

@@ -210,6 +210,14 @@ class NoveltyEnv(abc.ABC):
         """float32[S]: every object's raw features, padded (the "no feature selection" observation)."""
 
     @property
+    def full_state_varying(self) -> np.ndarray:
+        """int[V]: the positions of `full_state` that can change within a task, ascending; every other
+        entry is fixed by the task (walls, poses, targets, padding). The learners then store only these
+        and multiply the task's constants once per task (`check_env` checks the rest stay put).
+        Default: all of them."""
+        return np.arange(self.full_state_size)
+
+    @property
     def full_state_fits(self) -> bool:
         """Whether `full_state` can hold every object of this env's capacity (S is fixed by the largest
         test task, so larger sweep tasks are beyond the full-state ablations' input)."""

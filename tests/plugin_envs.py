@@ -39,4 +39,12 @@ class SmallPlanBound(LockedBox):
         return 1, 1
 
 
+
+class StillRobot(LockedBox):
+    """Claims its robot never moves (a learner would treat its position as the task's constant)."""
+    @property
+    def full_state_varying(self):
+        return super().full_state_varying[1:]
+
+
 NotAnEnv = object

@@ -46,7 +46,7 @@ def test_train_writes_the_run_directory(short_run):
     summary = json.loads((run_dir / "summary.json").read_text())
     assert summary["cycles"] == 3 and summary["seeds"] == [0, 1]
     config = json.loads((run_dir / "config.json").read_text())
-    assert config["config_version"] == 2 and config["num_seeds"] == 2 and config["approach"] == "ours"
+    assert config["config_version"] == 3 and config["num_seeds"] == 2 and config["approach"] == "ours"
     assert (run_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in (run_dir / "checkpoints").iterdir() if p.name.isdigit()) == ["2", "3"]
     assert "done in" in proc.stdout

@@ -27,6 +27,7 @@ def test_the_example_env_keeps_the_contract_and_its_oracle_solves_its_tasks():
     (plugin_envs.CountingStep, "CountingStep.step: expected the same values from the same inputs"),
     (plugin_envs.WrongAbstraction, "WrongAbstraction.abstract(reset(task)): expected the atoms of planner_problem"),
     (plugin_envs.SmallPlanBound, "SmallPlanBound.plan_bound: expected (states, operators) at least the"),
+    (plugin_envs.StillRobot, "StillRobot.full_state_varying: expected every entry that changes within a task, got entries [0]"),
     (plugin_envs.ClumsyOracle, "ClumsyOracle.oracle_bridge: expected every test task of seed 0 solved"),
 ])
 def test_check_env_names_the_broken_method_and_what_it_expected(broken, message):

@@ -22,7 +22,7 @@ from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.smoothing import smooth
 from jaxbridge.learn.q_bridge import (SPLIT_FROM_FEATURES, QNetwork, SplitInput, best_candidate, candidate_skills,
-                                candidates_input, encode, input_size, sample_candidates)
+                                candidates_input, encode, input_size, sample_candidates, task_state_split)
 from jaxbridge.learn.replay import add, init_buffer, sample, sample_indices
 from jaxbridge.core.tasks import evaluation_batch, make_batch
 from jaxbridge.learn.transitions import Transition, episode_transitions, for_buffer, successor_features
@@ -353,3 +353,64 @@ def test_a_short_learning_run_beats_the_RandomBridge():
     random = run_bridge(setup.test, make_bridge("random", setup.test.env), seed=0).success.mean()
     assert learned.max() >= 0.8 and learned.max() > random
     assert history[-1].train_success_rate.max() > history[0].train_success_rate.max()
+
+
+@pytest.mark.parametrize("env_name, ensemble", [("light_switch_door", 1), ("coffee", 1), ("doorknobs", 2)])
+def test_the_task_constant_split_is_the_whole_network_in_values_and_gradients(env_name, ensemble):
+    """Each env's full state as varying entries plus its task's constants (multiplied once per task, then
+    gathered by task index) gives the unsplit network's Q and parameter gradients, to float tolerance."""
+    from jaxbridge.learn.q_bridge import TaskPart, encode_action, task_state_split
+    from envs_jax.registry import env_class
+    batch = evaluation_batch(env_class(env_name), [0], 3)
+    env, split = batch.env, task_state_split(batch.env)
+    assert split is not None and len(split.constant) > 0
+    varying, constant = np.array(split.varying), np.array(split.constant)
+    start = jax.vmap(lambda task: env.full_state(env.reset(task)))(batch.arrays.tasks)  # [B, S]
+    b = np.repeat(np.arange(batch.size), 12)  # 12 observations per task: its constants, random varying values
+    observations = start[b].at[:, varying].set(jax.random.normal(jax.random.key(7), (len(b), len(varying))))
+    skills = jax.random.randint(jax.random.key(1), b.shape, 0, env.num_skills + 1)
+    params_in = jax.random.uniform(jax.random.key(2), b.shape)
+    net = QNetwork((32, 32), ensemble)
+    params = net.init(jax.random.key(0), jnp.zeros((1, input_size(env, env.full_state_size))))
+    params = jax.tree.map(lambda p: p + 0.3 * jax.random.normal(jax.random.key(3), p.shape), params)
+    task = TaskPart(values=start[:, constant], index=jnp.asarray(b), split=split)
+    whole = lambda p: net.apply(p, encode(env, observations, skills, params_in), members=True)
+    parts = lambda p: net.apply(p, SplitInput(observations[:, varying], encode_action(env, skills, params_in), task),
+                                members=True)
+    chex.assert_trees_all_close(parts(params), whole(params), atol=1e-4, rtol=1e-4)
+    weights = jax.random.normal(jax.random.key(4), whole(params).shape)
+    grad = lambda f: jax.grad(lambda p: jnp.sum(f(p) * weights))(params)
+    chex.assert_trees_all_close(grad(parts), grad(whole), atol=1e-4, rtol=1e-4)
+
+
+def test_a_split_learner_relabels_and_updates_as_the_unsplit_one():
+    """Through the learner: the same transitions stored split (varying entries and a task index) or whole
+    give the same TD targets and the same parameters after an update, to float tolerance."""
+    batch = evaluation_batch(LightSwitchDoor, [0], 3)
+    result, rec = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
+                          jax.random.split(jax.random.key(0), batch.size), 40, record=True)
+    full = jax.vmap(jax.vmap(batch.env.full_state))(rec.env_state)  # every step's full state, [T, B, S]
+    config = TrainConfig(approach="no_feature_selection", buffer_capacity=256, n_target_sample=3, batch_size=32)
+    whole_dqn = make_dqn(config, batch.env, batch.env.full_state_size)
+    split_dqn = make_dqn(config, batch.env, batch.env.full_state_size, task_state_split(batch.env))
+    transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
+        rec.replace(features=full), result.success, batch.env.num_skills, 0.0)
+    varying = np.array(split_dqn.split.varying)
+    parted = transitions.replace(features=transitions.features[..., varying],
+                                 task=jnp.broadcast_to(jnp.arange(batch.size, dtype=jnp.int32)[:, None], valid.shape))
+    flat = lambda x: x.reshape((-1,) + x.shape[2:])
+    learners = []
+    for learning, items in ((whole_dqn, transitions), (split_dqn, parted)):
+        learner = init_learner(learning, jax.random.key(5))
+        learner = learner.replace(target_params=jax.tree.map(lambda p: p + 0.1, learner.params))
+        learners.append(learner.replace(buffer=add(learner.buffer, jax.tree.map(flat, for_buffer(items)), flat(valid))))
+    whole, split = learners
+    assert split.buffer.data.features.shape[-1] == len(varying) < whole.buffer.data.features.shape[-1]
+    task = split_dqn.task_part(batch.arrays.tasks)
+    key = jax.random.key(6)
+    targets, stored = dqn.relabel(whole_dqn, whole, key), int(whole.buffer.size)  # empty slots differ, unread
+    chex.assert_trees_all_close(dqn.relabel(split_dqn, split, key, task)[:stored], targets[:stored], atol=1e-4)
+    index = jnp.arange(32) % stored
+    updated = [dqn.update_step(whole_dqn, whole, targets, index)[0].params,
+               dqn.update_step(split_dqn, split, targets, index, task)[0].params]
+    chex.assert_trees_all_close(updated[1], updated[0], atol=1e-5)

@@ -24,6 +24,7 @@ from typing import ClassVar
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from envs_jax.coffee import skills
 from envs_jax.coffee import world
@@ -177,6 +178,11 @@ class Coffee(NoveltyEnv):
         offset = jnp.abs(state.jug_xy - state.robot[:2])
         return jnp.concatenate([offset, jnp.stack([state.jug_rot, state.jug_held, state.jug_filled])
                                 .astype(jnp.float32)])
+
+    @property
+    def full_state_varying(self) -> np.ndarray:
+        # robot, jug and machine, and each cup's liquid; the cups' places, capacities and targets are the task's
+        return np.concatenate([np.arange(12), 12 + 5 * np.arange(MAX_CUPS) + 4])
 
     def full_state(self, state: State) -> jax.Array:
         """float32[32]: robot (x, y, z, tilt, wrist, fingers); jug (x, y, rot, held, filled); machine (on);

@@ -293,6 +293,15 @@ class Doorknobs(NoveltyEnv):
         moved = jnp.stack([jnp.max(moved), jnp.min(moved)])
         return jnp.concatenate([jnp.where(jnp.any(candidates), knob, 0.0), moved])
 
+    @property
+    def full_state_varying(self) -> np.ndarray:
+        # the robot, each door's open flag, each knob's rotation and open flag (method: full_state's
+        # layout); rooms, poses, masses, frictions, targets, walls and clutter are the task's
+        slots = 2 * TEST_MAP_SIZE ** 2
+        doors = 2 + 2 * TEST_MAP_SIZE ** 2 + 6 * np.arange(slots)
+        knobs = doors[-1] + 6 + 6 * np.arange(slots)
+        return np.sort(np.concatenate([[0, 1], doors + 5, knobs + 3, knobs + 5]))
+
     def full_state(self, state: State) -> jax.Array:
         """float32[full_state_size]: robot (x, y); rooms (x, y); doors (x, y, theta, mass, friction, open);
         knobs (x, y, theta, rot, target_rot, open); walls, then clutter (x, y, width, height, theta).

@@ -291,6 +291,12 @@ class LightSwitchDoor(NoveltyEnv):
     def full_state_fits(self) -> bool:
         return self.max_cells <= self.max_task_cells and self.max_doors <= self.max_task_doors
 
+    @property
+    def full_state_varying(self) -> np.ndarray:
+        # robot x, light level, and each door's two keys; cells, targets and door positions are the task's
+        doors = 4 + self.max_cells + 5 * np.arange(self.max_doors)[:, None] + np.array([1, 3])
+        return np.concatenate([[0, 2], doors.reshape(-1)])
+
     def full_state(self, state: State) -> jax.Array:
         """Every object's raw features (method.md §4.3, "no feature selection"): robot x; light x,
         level, target; each cell's x; each door's x, keys and targets; absent objects are zeros."""

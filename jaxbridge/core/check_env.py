@@ -196,8 +196,24 @@ def _same(where: str, *values: Any) -> None:
 def _check_oracle(cls: type[NoveltyEnv], seed: int, num_test_tasks: int) -> None:
     batch = evaluation_batch(cls, [seed], num_test_tasks)
     where = f"{cls.__name__}.oracle_bridge"
-    result, _ = _calls(where, lambda: rollout(batch.env, OracleBridge(batch.env), None, batch.arrays,
-                                              jax.random.split(jax.random.key(seed), batch.size), batch.max_steps))
+    result, records = _calls(where, lambda: rollout(batch.env, OracleBridge(batch.env), None, batch.arrays,
+                                                    jax.random.split(jax.random.key(seed), batch.size),
+                                                    batch.max_steps, record=True))
     solved = np.asarray(result.success)
     _expect(solved.all(), where, f"every test task of seed {seed} solved within its horizon",
             f"{int(solved.sum())} of {solved.size} (unsolved: tasks {np.flatnonzero(~solved).tolist()})")
+    _check_varying(batch.env, records)
+
+
+def _check_varying(env: NoveltyEnv, records: Any) -> None:
+    """`full_state_varying` names every entry that moved along the oracle's episodes (states [T, B])."""
+    where, size = f"{type(env).__name__}.full_state_varying", env.full_state_size
+    varying = np.asarray(env.full_state_varying)
+    _expect(varying.ndim == 1 and np.issubdtype(varying.dtype, np.integer) and np.all(np.diff(varying) > 0)
+            and (varying.size == 0 or 0 <= varying[0] <= varying[-1] < size), where,
+            f"ascending distinct ints in [0, full_state_size = {size})", repr(varying))
+    states = np.asarray(jax.jit(jax.vmap(jax.vmap(env.full_state)))(records.env_state))
+    moved = (states != states[:1]) & np.asarray(records.live)[..., None]
+    unnamed = np.setdiff1d(np.flatnonzero(moved.any(axis=(0, 1))), varying)
+    _expect(unnamed.size == 0, where, "every entry that changes within a task",
+            f"entries {unnamed[:8].tolist()} also change along the oracle's episodes")

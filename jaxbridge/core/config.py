@@ -5,7 +5,9 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-CONFIG_VERSION = 2  # 2: `approach` (version 1 configs were all "ours" and still load)
+# 2: `approach` (version 1 configs were all "ours" and still load); 3: `split_task_state` (older runs
+# stored whole observations and load with it off)
+CONFIG_VERSION = 3
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,11 @@ class TrainConfig:
     """Clip the bootstrapped next-state value of every TD target to [0, 1 + call_planner_bonus], the range
     every true Q lies in (rewards are 0, or that much at the goal). Stops the max over sampled parameters
     from feeding its upward noise back into the targets (off in the paper)."""
+    split_task_state: bool = True
+    """The full-state ablations store only the entries of the full state that change within a task
+    (`full_state_varying` of the env) and multiply the task's constants once per task in the first layer:
+    the same network up to float rounding, a fraction of the buffer and the arithmetic (Doorknobs: 152 of
+    2027 values)."""
     checkpoint_every: int = 10
     """Save the learner state every this many cycles (and after the last one)."""
 
@@ -85,6 +92,8 @@ class TrainConfig:
         version = data.pop("config_version", None)
         if version == 1:
             data.setdefault("approach", "ours")
+        if version in (1, 2):
+            data.setdefault("split_task_state", False)
         elif version != CONFIG_VERSION:
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         fields = {f.name for f in dataclasses.fields(cls)}

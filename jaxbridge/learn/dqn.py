@@ -6,13 +6,15 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optax
 from flax import struct
 
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.optim import clipped_adam
-from jaxbridge.learn.q_bridge import QNetwork, best_candidate, candidate_skills, encode, input_size
+from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, batch_input, best_candidate, candidate_skills,
+                                      input_size)
 from jaxbridge.learn.replay import ReplayBuffer, init_buffer, sample_indices
 from jaxbridge.learn.transitions import Transition, for_buffer, successor_features
 
@@ -40,6 +42,24 @@ class DQN:
     net: QNetwork
     optimizer: optax.GradientTransformation
     num_features: int  # the approach's observation width (object-centric features or the full state)
+    # A wide observation's task-constant entries, split off (None: the buffer stores whole observations).
+    split: StateSplit | None = None
+
+    @property
+    def stored_features(self) -> int:
+        """The width of an observation in the replay buffer: with a split, only its varying entries."""
+        return self.num_features if self.split is None else len(self.split.varying)
+
+    def task_part(self, tasks: Any) -> TaskPart | None:
+        """The task-constant entries of the training tasks `tasks` (the env's Task struct, [T]), for the
+        buffer's transitions to index (their `task`); None without a split."""
+        if self.split is None:
+            return None
+        if tasks is None:
+            raise ValueError("a learner with a task-constant split needs its training tasks")
+        constant = np.array(self.split.constant)
+        values = jax.vmap(lambda task: self.env.full_state(self.env.reset(task))[constant])(tasks)
+        return TaskPart(values=values, index=jnp.zeros((), jnp.int32), split=self.split)
 
 
 def q_network(config: TrainConfig) -> QNetwork:
@@ -50,8 +70,8 @@ def make_optimizer(config: TrainConfig) -> optax.GradientTransformation:
     return clipped_adam(config.grad_clip, config.learning_rate)
 
 
-def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int) -> DQN:
-    return DQN(env, config, q_network(config), make_optimizer(config), num_features)
+def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
+    return DQN(env, config, q_network(config), make_optimizer(config), num_features, split)
 
 
 def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:
@@ -59,12 +79,14 @@ def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:
     return jnp.maximum(config.epsilon_end, config.epsilon_start - config.epsilon_decay * decisions)
 
 
-def empty_transition(num_features: int, num_skills: int) -> Transition:
-    """The replay buffer's item: a transition without next_features (transitions.for_buffer)."""
-    f = jnp.zeros(num_features, jnp.float32)
+def empty_transition(dqn: DQN) -> Transition:
+    """The replay buffer's item: a transition without next_features (transitions.for_buffer), with its
+    training task's index when the observation is split."""
+    f = jnp.zeros(dqn.stored_features, jnp.float32)
     return for_buffer(Transition(features=f, skill=jnp.int32(0), param=jnp.float32(0), reward=jnp.float32(0),
                                  done=jnp.bool_(True), next_features=f,
-                                 next_num_ground=jnp.zeros(num_skills + 1, jnp.int32)))
+                                 next_num_ground=jnp.zeros(dqn.env.num_skills + 1, jnp.int32),
+                                 task=None if dqn.split is None else jnp.int32(0)))
 
 
 def init_learner(dqn: DQN, key: jax.Array) -> Learner:
@@ -74,20 +96,24 @@ def init_learner(dqn: DQN, key: jax.Array) -> Learner:
     params = dqn.net.init(k_init, jnp.zeros((1, input_size(env, num_features)), jnp.float32))
     return Learner(params=params, target_params=jax.tree.map(jnp.copy, params),
                    opt_state=dqn.optimizer.init(params),
-                   buffer=init_buffer(empty_transition(num_features, env.num_skills), dqn.config.buffer_capacity),
+                   buffer=init_buffer(empty_transition(dqn), dqn.config.buffer_capacity),
                    key=k_run,
                    decisions=jnp.int32(0), updates=jnp.int32(0))
 
 
-def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key: jax.Array) -> jax.Array:
+def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key: jax.Array,
+               task: TaskPart | None = None) -> jax.Array:
     """Double DQN: the online net picks a* among the next state's applicable actions (n_target_sample
-    parameter samples per skill), the target net values it; no bootstrapping past `done`."""
+    parameter samples per skill), the target net values it; no bootstrapping past `done`. With a split,
+    `task` holds the training tasks' constants and `batch.task` indexes them."""
     env, config, net = dqn.env, dqn.config, dqn.net
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
-    best, _ = jax.vmap(lambda f, g, k: best_candidate(env, net, params, f, g, skills, k))(
-        batch.next_features, batch.next_num_ground, keys)
-    next_q = net.apply(target_params, encode(env, batch.next_features, best.skill, best.param))
+    of = (lambda index: task.replace(index=index)) if task is not None else (lambda index: None)
+    index = batch.task if task is not None else jnp.zeros(batch.reward.shape, jnp.int32)
+    best, _ = jax.vmap(lambda f, g, k, i: best_candidate(env, net, params, f, g, skills, k, of(i)))(
+        batch.next_features, batch.next_num_ground, keys, index)
+    next_q = net.apply(target_params, batch_input(env, batch.next_features, best.skill, best.param, of(index)))
     if config.clip_bootstrap:
         next_q = jnp.clip(next_q, 0.0, 1.0 + config.call_planner_bonus)
     return batch.reward + config.gamma * jnp.where(batch.done, 0.0, next_q)
@@ -96,7 +122,7 @@ def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key
 RELABEL_CHUNK = 1024
 
 
-def relabel(dqn: DQN, learner: Learner, key: jax.Array) -> jax.Array:
+def relabel(dqn: DQN, learner: Learner, key: jax.Array, task: TaskPart | None = None) -> jax.Array:
     """float32[capacity]: TD targets of every stored transition, recomputed once per cycle with the
     current nets (as the authors' code does), in chunks up to the buffer's fill level."""
     buffer = learner.buffer
@@ -108,7 +134,7 @@ def relabel(dqn: DQN, learner: Learner, key: jax.Array) -> jax.Array:
         batch = jax.tree.map(lambda x: x[i], data)
         slots = i * RELABEL_CHUNK + jnp.arange(RELABEL_CHUNK)
         batch = batch.replace(next_features=successor_features(buffer.data.features, slots))
-        y = td_targets(dqn, learner.params, learner.target_params, batch, jax.random.fold_in(key, i))
+        y = td_targets(dqn, learner.params, learner.target_params, batch, jax.random.fold_in(key, i), task)
         return targets.at[i].set(y)
 
     filled = (buffer.size + RELABEL_CHUNK - 1) // RELABEL_CHUNK
@@ -116,14 +142,16 @@ def relabel(dqn: DQN, learner: Learner, key: jax.Array) -> jax.Array:
     return targets.reshape(-1)[: buffer.capacity]
 
 
-def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array) -> tuple[Learner, jax.Array]:
+def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array,
+                task: TaskPart | None = None) -> tuple[Learner, jax.Array]:
     """One Adam step on the minibatch of (transition, target) at buffer slots `index`, then a polyak
     step of the target net."""
     env, config, net = dqn.env, dqn.config, dqn.net
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
 
     def loss_fn(params):
-        q = net.apply(params, encode(env, batch.features, batch.skill, batch.param), members=True)
+        part = None if task is None else task.replace(index=batch.task)
+        q = net.apply(params, batch_input(env, batch.features, batch.skill, batch.param, part), members=True)
         return jnp.mean((q - targets[index]) ** 2), jnp.max(jnp.abs(q))  # every member fits the targets
 
     (loss, q_abs_max), grads = jax.value_and_grad(loss_fn, has_aux=True)(learner.params)
@@ -161,14 +189,16 @@ def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) ->
     return learner.replace(target_params=target)
 
 
-def learn(dqn: DQN, learner: Learner, decisions: jax.Array) -> tuple[Learner, jax.Array, jax.Array]:
+def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None) -> tuple[Learner, jax.Array, jax.Array]:
     """After a cycle's episodes (`decisions` training bridge decisions): track the target net, relabel
-    the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty).
+    the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty). `tasks`:
+    the training tasks the buffer's `task` indices refer to (needed with a split).
     Returns the learner, the mean loss and the largest |Q| predicted in the minibatches."""
     config = dqn.config
+    task = dqn.task_part(tasks)
     learner = track_target(config, learner, decisions)
     key, k_relabel = jax.random.split(learner.key)
-    targets = relabel(dqn, learner, k_relabel)
+    targets = relabel(dqn, learner, k_relabel, task)
     learner = learner.replace(key=key)
 
     if config.updates_per_cycle == 0:
@@ -177,7 +207,7 @@ def learn(dqn: DQN, learner: Learner, decisions: jax.Array) -> tuple[Learner, ja
     ready = learner.buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
 
     def body(learner, index):
-        updated, (loss, q_abs_max) = update_step(dqn, learner, targets, index)
+        updated, (loss, q_abs_max) = update_step(dqn, learner, targets, index, task)
         stats = (jnp.where(ready, loss, 0.0), jnp.where(ready, q_abs_max, 0.0))
         # Selecting per update rather than once after the scan: the same values, but XLA fuses the
         # update differently without it and the last bits change (the runs in docs/ would not reproduce).

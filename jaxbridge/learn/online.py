@@ -66,6 +66,7 @@ def make_seed_cycle(setup: Setup) -> Callable:
     train_bridge, test_bridge = setup.bridge(train.env), setup.bridge(test.env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train.env.num_skills
+    split = setup.dqn.split
     # One insert per cycle, in order: the buffer finds a transition's next_features in the slot after it
     # (transitions.successor_features), which an insert larger than the buffer would overwrite.
     if episodes * config.train_steps > config.buffer_capacity:
@@ -86,12 +87,16 @@ def make_seed_cycle(setup: Setup) -> Callable:
             # 2. One transition per bridge decision into the replay buffer.
             transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
                 records, result.success, call_planner, config.call_planner_bonus)
+            if split is not None:  # keep what changes within the task, and which training task it was
+                transitions = transitions.replace(
+                    features=transitions.features[..., np.array(split.varying)],
+                    task=jnp.broadcast_to(jnp.arange(episodes, dtype=jnp.int32)[:, None], valid.shape))
             flat = lambda x: x.reshape((-1,) + x.shape[2:])
             buffer = add(learner.buffer, jax.tree.map(flat, for_buffer(transitions)), flat(valid))
             learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)
 
             # 3. Double-DQN updates.
-            learner, loss, q_abs_max = learn(setup.dqn, learner, decisions)
+            learner, loss, q_abs_max = learn(setup.dqn, learner, decisions, train_tasks.tasks)
         else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
             learner = learner.replace(decisions=learner.decisions + decisions)
             eps = jnp.float32(1.0 if approach.bridge == "random" else 0.0)

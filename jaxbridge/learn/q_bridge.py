@@ -20,15 +20,53 @@ from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv, tree_where
 from jaxbridge.core.bridges import RandomBridge
 
 
+@dataclass(frozen=True)
+class StateSplit:
+    """Which entries of a wide observation change within a task (`varying`) and which the task fixes
+    (`constant`): positions in the observation, in order. Static: one compilation per split."""
+
+    varying: tuple[int, ...]
+    constant: tuple[int, ...]
+
+    @property
+    def width(self) -> int:
+        return len(self.varying) + len(self.constant)
+
+
+def task_state_split(env: NoveltyEnv) -> StateSplit | None:
+    """The env's full state as varying and task-constant entries (None if nothing is constant)."""
+    varying = np.asarray(env.full_state_varying)
+    constant = np.setdiff1d(np.arange(env.full_state_size), varying)
+    return StateSplit(tuple(map(int, varying)), tuple(map(int, constant))) if len(constant) else None
+
+
+@struct.dataclass
+class TaskPart:
+    """The task-constant entries of an observation given once per task: `values` [T, K] for T tasks and,
+    per observation, `index` (int32, broadcastable to the observation's leading axes) into them. The
+    first layer then multiplies each task's constants once, not once per transition or candidate."""
+
+    values: jax.Array
+    index: jax.Array
+    split: StateSplit = struct.field(pytree_node=False)
+
+
 @struct.dataclass
 class SplitInput:
-    """A network input given as its two parts: `observation` [..., F] and `action` [..., A], the
-    observation's leading axes broadcastable to the action's (one observation, many candidate actions).
-    The first layer then computes the observation's share once rather than once per action; same
-    parameters as for the concatenated input [..., F + A], same function up to float rounding."""
+    """A network input given as its parts: `observation` [..., F] and `action` [..., A], the
+    observation's leading axes broadcastable to the action's (one observation, many candidate actions),
+    and optionally `task`: then `observation` holds only the entries that vary within a task and the
+    rest come from the task's constants. The first layer computes each part's share once; same
+    parameters as for the whole input [..., F (+ K) + A], same function up to float rounding."""
 
     observation: jax.Array
     action: jax.Array
+    task: TaskPart | None = None
+
+    @property
+    def width(self) -> int:
+        observed = self.task.split.width if self.task is not None else self.observation.shape[-1]
+        return observed + self.action.shape[-1]
 
 
 class UniformDense(nn.Module):
@@ -41,15 +79,19 @@ class UniformDense(nn.Module):
     @nn.compact
     def __call__(self, x: jax.Array | SplitInput) -> jax.Array:
         split = isinstance(x, SplitInput)
-        fan_in = x.observation.shape[-1] + x.action.shape[-1] if split else x.shape[-1]
+        fan_in = x.width if split else x.shape[-1]
         bound = self.scale / np.sqrt(fan_in)
         init = lambda key, shape: jax.random.uniform(key, shape, jnp.float32, -bound, bound)
         kernel = self.param("kernel", init, (fan_in, self.features))
         bias = self.param("bias", init, (self.features,))
-        if split:
-            width = x.observation.shape[-1]
-            return x.observation @ kernel[:width] + (x.action @ kernel[width:] + bias)
-        return x @ kernel + bias
+        if not split:
+            return x @ kernel + bias
+        action_share = x.action @ kernel[fan_in - x.action.shape[-1]:] + bias
+        if x.task is None:
+            return x.observation @ kernel[:x.observation.shape[-1]] + action_share
+        rows = x.task.split
+        task_share = (x.task.values @ kernel[np.array(rows.constant)])[x.task.index]  # once per task, then gathered
+        return task_share + x.observation @ kernel[np.array(rows.varying)] + action_share
 
 
 LEAKY_SLOPE = 0.01
@@ -123,12 +165,21 @@ def encode(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Ar
 SPLIT_FROM_FEATURES = 32
 
 
-def candidates_input(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Array
-                     ) -> jax.Array | SplitInput:
-    """The Q-network input for one observation `features` [F] and candidates (skill, param) [C]."""
-    if features.shape[-1] >= SPLIT_FROM_FEATURES:
-        return SplitInput(features, encode_action(env, skill, param))
+def candidates_input(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Array,
+                     task: TaskPart | None = None) -> jax.Array | SplitInput:
+    """The Q-network input for one observation `features` [F] (its varying entries, with `task`) and
+    candidates (skill, param) [C]."""
+    if task is not None or features.shape[-1] >= SPLIT_FROM_FEATURES:
+        return SplitInput(features, encode_action(env, skill, param), task)
     return encode(env, features, skill, param)
+
+
+def batch_input(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Array,
+                task: TaskPart | None = None) -> jax.Array | SplitInput:
+    """The Q-network input for a batch of (features, skill, param) [B]: whole, or split by `task`."""
+    if task is None:
+        return encode(env, features, skill, param)
+    return SplitInput(features, encode_action(env, skill, param), task)
 
 
 def candidate_skills(env: NoveltyEnv, n_sample: int) -> np.ndarray:
@@ -154,10 +205,10 @@ def sample_candidates(env: NoveltyEnv, skills: np.ndarray, key: jax.Array) -> ja
 
 
 def best_candidate(env: NoveltyEnv, net: QNetwork, q_params: Any, features: jax.Array, num_ground: jax.Array,
-                   skills: np.ndarray, key: jax.Array) -> tuple[BridgeAction, jax.Array]:
+                   skills: np.ndarray, key: jax.Array, task: TaskPart | None = None) -> tuple[BridgeAction, jax.Array]:
     """argmax over the applicable candidates of Q(features, skill, param); also returns the max Q."""
     params = sample_candidates(env, skills, key)
-    q = net.apply(q_params, candidates_input(env, features, jnp.asarray(skills), params))
+    q = net.apply(q_params, candidates_input(env, features, jnp.asarray(skills), params, task))
     q = jnp.where(num_ground[skills] > 0, q, -jnp.inf)
     best = jnp.argmax(q)
     return BridgeAction(skill=jnp.asarray(skills)[best], param=params[best]), q[best]

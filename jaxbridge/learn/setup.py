@@ -15,6 +15,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.dqn import DQN, Learner, init_learner, make_dqn
+from jaxbridge.learn.q_bridge import task_state_split
 from jaxbridge.utils.progress import SlowWork
 
 
@@ -55,7 +56,8 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     approach = get_approach(config.approach)
     train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
     test_env = env_cls.for_tasks([t for s in config.seeds for t in env_cls.test_tasks(s, config.num_test_tasks)])
-    dqn = make_dqn(config, train_env, approach.observation_size(train_env))
+    split = task_state_split(train_env) if approach.controls.full_state and config.split_task_state else None
+    dqn = make_dqn(config, train_env, approach.observation_size(train_env), split)
     return Setup(config, env_cls, approach, train_env, test_env, dqn)
 
 

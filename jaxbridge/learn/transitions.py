@@ -24,6 +24,7 @@ class Transition:
     done: jax.Array  # bool: no bootstrapping from next_* (goal reached or episode over)
     next_features: jax.Array  # float32[F]
     next_num_ground: jax.Array  # int32[num_skills + 1]: applicable actions at the next decision
+    task: jax.Array | None = None  # int32: its training task's row of the task-constant values (with a split)
 
 
 def episode_transitions(records: StepRecord, success: jax.Array, call_planner_skill: int,
