@@ -18,7 +18,7 @@ def run(*args, cwd=ROOT):
 def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
     proc = run("train.py", "--num-seeds", "2", "--cycles", "3", "--updates-per-cycle", "10",
-               "--checkpoint-every", "2", "--out", str(out), "--name", "tiny", "--no-progress",
+               "--checkpoint-every", "2", "--out", str(out), "--name", "tiny",
                "--approaches", "ours,pure_planning")
     assert proc.returncode == 0, proc.stderr
     return out / "tiny", proc
@@ -35,6 +35,14 @@ def test_train_writes_the_experiment_directory(short_run):
     assert "| ours | 2 |" in table and "| pure planning | 2 |" in table
     assert (experiment_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "pure_planning" in proc.stdout and "ours" in proc.stdout
+
+
+def test_progress_into_a_log_is_plain_lines(short_run):
+    """stderr is a pipe here, as under nohup or a scheduler: one plain line per reported cycle, no bar frames."""
+    lines = [line for line in short_run[1].stderr.splitlines() if " cycles (" in line]
+    assert "\r" not in short_run[1].stderr and len(lines) == 6, short_run[1].stderr  # 2 approaches x 3 cycles
+    assert lines[-1].startswith("light_switch_door x2 seeds, 2 approaches: 6/6 cycles (100%), ")
+    assert "ETA" in lines[0] and "test=" in lines[-1]
 
 
 def test_train_writes_the_run_directory(short_run):

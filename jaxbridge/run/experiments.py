@@ -15,7 +15,6 @@ import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from pathlib import Path
 
-from tqdm import tqdm
 
 from envs_jax import env_class
 from jaxbridge.core.config import TrainConfig
@@ -24,6 +23,7 @@ from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint, comparison, rundir
 from jaxbridge.run.runner import Interrupted, train
 from jaxbridge.utils.files import WriteError, write_atomic
+from jaxbridge.utils.progress import cycle_progress
 
 EXPERIMENT_FILE = "experiment.json"
 # Seconds per approach in `python -m bench.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
@@ -86,8 +86,8 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         rundir.discard(replaced)
     workers = workers or default_workers(approaches)
     env_cls = env_class(config.env)  # resolved once for every approach
-    bar = tqdm(total=config.cycles * len(approaches), unit="cycle", disable=not progress, dynamic_ncols=True,
-               desc=f"{config.env} x{config.num_seeds} seeds, {len(approaches)} approaches")
+    bar = cycle_progress(config.cycles * len(approaches), f"{config.env} x{config.num_seeds} seeds, "
+                         f"{len(approaches)} approaches", progress)
     stop = stop or threading.Event()
     device_shares = queue.SimpleQueue()  # a worker takes a share of the devices per approach, then returns it
     for share in split_devices(devices, min(workers, len(approaches))):

@@ -11,7 +11,6 @@ from typing import Callable
 
 import jax
 import numpy as np
-from tqdm import tqdm
 
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh, describe
@@ -19,6 +18,7 @@ from jaxbridge.learn.online import Cycle, CycleMetrics
 from jaxbridge.learn.setup import Setup, make_setup
 from jaxbridge.run import artifacts, checkpoint
 from jaxbridge.utils.files import WriteError, write_atomic
+from jaxbridge.utils.progress import cycle_progress
 
 
 class Interrupted(Exception):
@@ -87,7 +87,7 @@ def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int)
 
 
 def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = False,
-          fault_injection: Callable | None = None, bar: tqdm | None = None,
+          fault_injection: Callable | None = None, bar=None,
           stop: threading.Event | None = None, devices: list | None = None,
           trained: threading.Event | None = None) -> dict:
     """Run the cycles of `setup.config` (continuing the latest checkpoint with `resume`), writing the run
@@ -124,8 +124,7 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
     done, unwritable = (learners, history), False
     own_bar = bar is None
     if own_bar:
-        bar = tqdm(total=config.cycles, initial=len(history), desc=f"{config.env} x{config.num_seeds} seeds",
-                   unit="cycle", disable=not progress, dynamic_ncols=True)
+        bar = cycle_progress(config.cycles, f"{config.env} x{config.num_seeds} seeds", progress, len(history))
     else:
         bar.update(len(history))
     try:
