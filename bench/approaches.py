@@ -7,13 +7,15 @@
 The layout is train.py's: approaches in --workers threads, each sharding its seeds over --devices
 (default auto: one virtual CPU device per core).
 
-Prints each approach's time and final numbers, the total, and the ratio to the authors' compute for the
+Prints each approach's time and final numbers, a table of the seconds per approach, the total and the
+process's peak RSS, and the ratio to the authors' compute for the
 same figure (results.md: on the order of 100 CPU-hours for 6 approaches x 8 seeds).
 """
 from __future__ import annotations
 
 import argparse
 import json
+import resource
 import tempfile
 import time
 from pathlib import Path
@@ -57,8 +59,14 @@ def main() -> None:
     print(f"total: {total:.1f} s ({total / 60:.1f} min) for {seed_runs} seed-runs; "
           f"authors: ~{authors * seed_runs / 3600:,.0f} CPU-hours at {authors:,} s per seed-run "
           f"-> {authors * seed_runs / total:,.0f}x")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB on Linux -> GiB
+    print("\n| " + " | ".join(summaries) + " | total | peak RSS |")
+    print("|---" * (len(summaries) + 2) + "|")
+    print("| " + " | ".join(f"{info['elapsed_s']:.1f}" for info in summaries.values())
+          + f" | **{total:.1f} s ({total / 60:.1f} min)** | {peak:.2f} GiB |\n")
     print(results)
-    print(json.dumps({"total_s": round(total, 1), "per_approach_s": {k: v["elapsed_s"] for k, v in summaries.items()}}))
+    print(json.dumps({"total_s": round(total, 1), "peak_rss_gib": round(peak, 2),
+                      "per_approach_s": {k: v["elapsed_s"] for k, v in summaries.items()}}))
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ import shutil
 import sys
 from pathlib import Path
 
+from jaxbridge.learn.approaches import get_approach
 from jaxbridge.run.artifacts import REPORT_CYCLES
 from jaxbridge.run.comparison import write_comparison
 from jaxbridge.run.experiments import is_experiment_dir, load_experiment
@@ -43,7 +44,7 @@ def main() -> None:
         sys.exit(f"error: {args.experiment} is not an experiment directory (no experiment.json)")
     config, approaches = load_experiment(args.experiment)
     approaches = [a for a in approaches if (args.experiment / a / "metrics.csv").is_file()]
-    rows = write_comparison(args.experiment, config.env, approaches)
+    rows = write_comparison(args.experiment, config.env, [get_approach(a) for a in approaches])
     authors = AUTHORS.get(config.env, {})
 
     def cell(row, c):

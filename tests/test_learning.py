@@ -414,3 +414,20 @@ def test_a_split_learner_relabels_and_updates_as_the_unsplit_one():
     updated = [dqn.update_step(whole_dqn, whole, targets, index)[0].params,
                dqn.update_step(split_dqn, split, targets, index, task)[0].params]
     chex.assert_trees_all_close(updated[1], updated[0], atol=1e-5)
+
+
+def test_rollouts_take_one_shared_network_as_they_take_a_copy_per_episode():
+    """rollout(shared_params=True) gives every episode the one network and exploration rate it is passed:
+    exploring at epsilon 1 (choices from the keys alone), the episodes are exactly those of per-episode copies."""
+    from jaxbridge.learn.q_bridge import QBridge, QBridgeParams
+    batch = evaluation_batch(LightSwitchDoor, [0, 1], 3)
+    net = QNetwork((32, 32))
+    params = net.init(jax.random.key(0), jnp.zeros((1, input_size(batch.env, batch.env.full_state_size))))
+    bridge, keys, n = QBridge(batch.env, net, 10), jax.random.split(jax.random.key(1), batch.size), batch.size
+    controls = Controls(full_state=True)
+    copies = QBridgeParams(q=jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), params), epsilon=jnp.ones(n))
+    each, _ = rollout(batch.env, bridge, copies, batch.arrays, keys, batch.max_steps, controls=controls)
+    shared, _ = rollout(batch.env, bridge, QBridgeParams(q=params, epsilon=jnp.float32(1.0)), batch.arrays, keys,
+                        batch.max_steps, controls=controls, shared_params=True)
+    chex.assert_trees_all_equal(shared, each)
+    assert int(each.bridge_decisions.sum()) > 0

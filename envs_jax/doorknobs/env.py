@@ -140,8 +140,7 @@ class Doorknobs(NoveltyEnv):
     train_defaults = {"call_planner_bonus": 0.5, "updates_per_cycle": 150, "clip_bootstrap": True, "q_ensemble": 2}
     # The full-state ablations (2027 inputs) run only when asked (docs/PERFORMANCE.md).
     default_approaches = ("ours", "no_callplanner", "random", "pure_planning")
-    why_not_all = ("their full state is 2027 values wide: all six take ~25 minutes on 2 cores, these four ~4, "
-                   "and ~7 GB of memory each")
+    why_not_all = "their full state is 2027 values wide: all six take ~11 minutes on 2 cores, these four ~4"
     # "No feature selection": every object's raw features, padded to the largest (5x5) map.
     full_state_size: ClassVar[int] = (2 + 2 * TEST_MAP_SIZE ** 2 + 12 * 2 * TEST_MAP_SIZE ** 2
                                       + 5 * (WALLS_PER_ROOM + MAX_CLUTTER) * TEST_MAP_SIZE ** 2)

@@ -278,13 +278,15 @@ def no_plan(num_episodes: int, words: int) -> PlanLookup:
                       next_key=jnp.zeros((num_episodes, words), jnp.uint32), miss=jnp.zeros(num_episodes, bool))
 
 
-@partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls"))
+@partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls", "shared_params"))
 def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArrays, keys: jax.Array,
-            max_steps: int, record: bool = False, controls: Controls = Controls()):
+            max_steps: int, record: bool = False, controls: Controls = Controls(), shared_params: bool = False):
     """Run the meta-policy on a batch of B episodes for at most `max_steps` env steps.
 
     `batch` (the episodes' tasks, plan tables and horizons), keys (one per episode) and bridge_params (None,
-    or a pytree) carry a leading batch axis B. `controls` picks the approach's parts of the meta-policy.
+    or a pytree) carry a leading batch axis B; with `shared_params`, bridge_params has none and every
+    episode uses it (one network: its layers multiply all episodes at once, not one matrix per episode).
+    `controls` picks the approach's parts of the meta-policy.
     Returns EpisodeResult[B] and, with `record`, StepRecord[max_steps, B].
     """
     tasks, tables, horizons = batch.tasks, batch.tables, batch.horizons
@@ -307,8 +309,8 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArra
                                                                 param_uniforms)
         decision = jax.lax.cond(  # the bridge only runs on steps where some episode must choose
             jnp.any(decide),
-            lambda: jax.vmap(partial(bridge_turn, env, controls, bridge))(bridge_params, episodes, tables, packed,
-                                                                           bridge_keys, choice_bits),
+            lambda: jax.vmap(partial(bridge_turn, env, controls, bridge), in_axes=(None if shared_params else 0,) + (0,) * 5)(
+                bridge_params, episodes, tables, packed, bridge_keys, choice_bits),
             lambda: no_decision)
         stuck = episodes.stuck_events > stuck_before
         episodes, rec = jax.vmap(partial(execute, env))(episodes, decide, decision, stuck)

@@ -67,6 +67,15 @@ def make_seed_cycle(setup: Setup) -> Callable:
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train.env.num_skills
     split = setup.dqn.split
+    # Every episode of a seed's cycle has the seed's network: the split approaches give it to the rollouts
+    # once (fast matrix products); the others keep a copy per episode, the layout their published numbers
+    # were computed with (the products sum in another order, so sharing would change their last bits).
+    shared = split is not None
+
+    def bridge_params(params, eps: jax.Array, n: int) -> QBridgeParams:
+        if shared:
+            return QBridgeParams(q=params, epsilon=eps)
+        return QBridgeParams(q=_repeat(params, n), epsilon=jnp.full(n, eps, jnp.float32))
     # One insert per cycle, in order: the buffer finds a transition's next_features in the slot after it
     # (transitions.successor_features), which an insert larger than the buffer would overwrite.
     if episodes * config.train_steps > config.buffer_capacity:
@@ -78,9 +87,9 @@ def make_seed_cycle(setup: Setup) -> Callable:
 
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
         eps = epsilon(config, learner.decisions)
-        explore = QBridgeParams(q=_repeat(learner.params, episodes), epsilon=jnp.full(episodes, eps))
+        explore = bridge_params(learner.params, eps, episodes)
         result, records = rollout(train.env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
-                                  config.train_steps, record=approach.learns, controls=controls)
+                                  config.train_steps, record=approach.learns, controls=controls, shared_params=shared)
         decisions = result.bridge_decisions.sum()
 
         if approach.learns:
@@ -104,9 +113,9 @@ def make_seed_cycle(setup: Setup) -> Callable:
         learner = learner.replace(key=k_next)
 
         # 4. Greedy evaluation on the seed's test tasks.
-        greedy = QBridgeParams(q=_repeat(learner.params, num_tests), epsilon=jnp.zeros(num_tests, jnp.float32))
+        greedy = bridge_params(learner.params, jnp.float32(0.0), num_tests)
         tested, _ = rollout(test.env, test_bridge, greedy, test_tasks, jax.random.split(k_test, num_tests),
-                            test.max_steps, controls=controls)
+                            test.max_steps, controls=controls, shared_params=shared)
 
         metrics = CycleMetrics(
             test_solve_rate=tested.success.mean(), train_success_rate=result.success.mean(),
