@@ -3,6 +3,7 @@ run keeping the last good checkpoint; bad input gets one line and exit code 2.""
 import csv
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -172,7 +173,8 @@ def test_ctrl_c_saves_a_checkpoint_of_the_last_completed_cycle(uninterrupted, tm
              f"sys.argv = {argv!r}; runpy.run_path('train.py', run_name='__main__')")
     proc = subprocess.Popen([sys.executable, "-c", child], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     seen = b""
-    while b" 2/30 " not in seen:  # the progress bar has shown the second cycle: interrupt now
+    # Interrupt once the progress lines (every 5% or 30 s) show a cycle from the second on.
+    while not any(int(done) >= 2 for done in re.findall(rb" (\d+)/30 cycles", seen)):
         chunk = proc.stderr.read1(4096)
         assert chunk, "the run ended before it could be interrupted"
         seen += chunk
