@@ -23,7 +23,7 @@ from jaxbridge.learn import dqn
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.learn.approaches import get_approach
-from jaxbridge.learn.q_bridge import batch_input
+from jaxbridge.learn.q_bridge import at_task, batch_input
 
 
 def _seconds(fn, arg) -> float:
@@ -46,8 +46,7 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
     net, optimizer = learning.net, learning.optimizer
     _, indices = dqn.minibatch_indices(config, learner)
     batch = jax.tree.map(lambda d: d[indices[0]], learner.buffer.data)
-    of = lambda b: None if task is None else task.replace(index=b.task)
-    inputs = batch_input(env, batch.features, batch.skill, batch.param, of(batch))
+    inputs = batch_input(env, batch.features, batch.skill, batch.param, at_task(task, batch.task))
 
     def repeat(step):  # `updates` iterations of step(carry) in a scan
         return lambda carry: jax.lax.scan(lambda c, _: (step(c), None), carry, None, length=updates)[0]
@@ -55,7 +54,7 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
     def gather_encode(total):
         def one(total, index):
             b = jax.tree.map(lambda d: d[index], learner.buffer.data)
-            encoded = batch_input(env, b.features, b.skill, b.param, of(b))
+            encoded = batch_input(env, b.features, b.skill, b.param, at_task(task, b.task))
             return total + sum(x.sum() for x in jax.tree.leaves(encoded)), None
         return jax.lax.scan(one, total, indices)[0]
 

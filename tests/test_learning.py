@@ -395,17 +395,15 @@ def test_a_split_learner_relabels_and_updates_as_the_unsplit_one():
     split_dqn = make_dqn(config, batch.env, batch.env.full_state_size, task_state_split(batch.env))
     transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
         rec.replace(features=full), result.success, batch.env.num_skills, 0.0)
-    varying = np.array(split_dqn.split.varying)
-    parted = transitions.replace(features=transitions.features[..., varying],
-                                 task=jnp.broadcast_to(jnp.arange(batch.size, dtype=jnp.int32)[:, None], valid.shape))
     flat = lambda x: x.reshape((-1,) + x.shape[2:])
     learners = []
-    for learning, items in ((whole_dqn, transitions), (split_dqn, parted)):
+    for learning in (whole_dqn, split_dqn):
         learner = init_learner(learning, jax.random.key(5))
         learner = learner.replace(target_params=jax.tree.map(lambda p: p + 0.1, learner.params))
-        learners.append(learner.replace(buffer=add(learner.buffer, jax.tree.map(flat, for_buffer(items)), flat(valid))))
+        items = jax.tree.map(flat, dqn.stored_transitions(learning, transitions))
+        learners.append(learner.replace(buffer=add(learner.buffer, items, flat(valid))))
     whole, split = learners
-    assert split.buffer.data.features.shape[-1] == len(varying) < whole.buffer.data.features.shape[-1]
+    assert split.buffer.data.features.shape[-1] == len(split_dqn.split.varying) < whole.buffer.data.features.shape[-1]
     task = split_dqn.task_part(batch.arrays.tasks)
     key = jax.random.key(6)
     targets, stored = dqn.relabel(whole_dqn, whole, key), int(whole.buffer.size)  # empty slots differ, unread

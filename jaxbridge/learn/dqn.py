@@ -13,8 +13,8 @@ from flax import struct
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.optim import clipped_adam
-from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, batch_input, best_candidate, candidate_skills,
-                                      input_size)
+from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
+                                      candidate_skills, input_size)
 from jaxbridge.learn.replay import ReplayBuffer, init_buffer, sample_indices
 from jaxbridge.learn.transitions import Transition, for_buffer, successor_features
 
@@ -79,6 +79,17 @@ def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:
     return jnp.maximum(config.epsilon_end, config.epsilon_start - config.epsilon_decay * decisions)
 
 
+def stored_transitions(dqn: DQN, transitions: Transition) -> Transition:
+    """A cycle's transitions [episodes, T] as the replay buffer keeps them (transitions.for_buffer): with a
+    split, only the entries that change within the task, and the index of the episode's training task."""
+    if dqn.split is not None:
+        episodes, steps = transitions.reward.shape
+        transitions = transitions.replace(
+            features=transitions.features[..., np.array(dqn.split.varying)],
+            task=jnp.broadcast_to(jnp.arange(episodes, dtype=jnp.int32)[:, None], (episodes, steps)))
+    return for_buffer(transitions)
+
+
 def empty_transition(dqn: DQN) -> Transition:
     """The replay buffer's item: a transition without next_features (transitions.for_buffer), with its
     training task's index when the observation is split."""
@@ -109,11 +120,10 @@ def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key
     env, config, net = dqn.env, dqn.config, dqn.net
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
-    of = (lambda index: task.replace(index=index)) if task is not None else (lambda index: None)
-    index = batch.task if task is not None else jnp.zeros(batch.reward.shape, jnp.int32)
-    best, _ = jax.vmap(lambda f, g, k, i: best_candidate(env, net, params, f, g, skills, k, of(i)))(
-        batch.next_features, batch.next_num_ground, keys, index)
-    next_q = net.apply(target_params, batch_input(env, batch.next_features, best.skill, best.param, of(index)))
+    best, _ = jax.vmap(lambda f, g, k, i: best_candidate(env, net, params, f, g, skills, k, at_task(task, i)))(
+        batch.next_features, batch.next_num_ground, keys, batch.task)
+    next_q = net.apply(target_params, batch_input(env, batch.next_features, best.skill, best.param,
+                                                  at_task(task, batch.task)))
     if config.clip_bootstrap:
         next_q = jnp.clip(next_q, 0.0, 1.0 + config.call_planner_bonus)
     return batch.reward + config.gamma * jnp.where(batch.done, 0.0, next_q)
@@ -150,8 +160,8 @@ def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
 
     def loss_fn(params):
-        part = None if task is None else task.replace(index=batch.task)
-        q = net.apply(params, batch_input(env, batch.features, batch.skill, batch.param, part), members=True)
+        q = net.apply(params, batch_input(env, batch.features, batch.skill, batch.param, at_task(task, batch.task)),
+                      members=True)
         return jnp.mean((q - targets[index]) ** 2), jnp.max(jnp.abs(q))  # every member fits the targets
 
     (loss, q_abs_max), grads = jax.value_and_grad(loss_fn, has_aux=True)(learner.params)

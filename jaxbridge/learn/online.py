@@ -19,11 +19,11 @@ from flax import struct
 from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import TaskArrays
 from jaxbridge.learn.devices import SeedMesh
-from jaxbridge.learn.dqn import Learner, epsilon, learn
+from jaxbridge.learn.dqn import Learner, epsilon, learn, stored_transitions
 from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.learn.replay import add
 from jaxbridge.learn.setup import Setup
-from jaxbridge.learn.transitions import episode_transitions, for_buffer
+from jaxbridge.learn.transitions import episode_transitions
 
 
 @struct.dataclass
@@ -66,11 +66,10 @@ def make_seed_cycle(setup: Setup) -> Callable:
     train_bridge, test_bridge = setup.bridge(train.env), setup.bridge(test.env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train.env.num_skills
-    split = setup.dqn.split
     # Every episode of a seed's cycle has the seed's network: the split approaches give it to the rollouts
     # once (fast matrix products); the others keep a copy per episode, the layout their published numbers
     # were computed with (the products sum in another order, so sharing would change their last bits).
-    shared = split is not None
+    shared = setup.dqn.split is not None
 
     def bridge_params(params, eps: jax.Array, n: int) -> QBridgeParams:
         if shared:
@@ -96,12 +95,8 @@ def make_seed_cycle(setup: Setup) -> Callable:
             # 2. One transition per bridge decision into the replay buffer.
             transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
                 records, result.success, call_planner, config.call_planner_bonus)
-            if split is not None:  # keep what changes within the task, and which training task it was
-                transitions = transitions.replace(
-                    features=transitions.features[..., np.array(split.varying)],
-                    task=jnp.broadcast_to(jnp.arange(episodes, dtype=jnp.int32)[:, None], valid.shape))
             flat = lambda x: x.reshape((-1,) + x.shape[2:])
-            buffer = add(learner.buffer, jax.tree.map(flat, for_buffer(transitions)), flat(valid))
+            buffer = add(learner.buffer, jax.tree.map(flat, stored_transitions(setup.dqn, transitions)), flat(valid))
             learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)
 
             # 3. Double-DQN updates.

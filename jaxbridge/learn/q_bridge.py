@@ -51,6 +51,11 @@ class TaskPart:
     split: StateSplit = struct.field(pytree_node=False)
 
 
+def at_task(task: TaskPart | None, index: jax.Array | None) -> TaskPart | None:
+    """`task` for observations of the training tasks at `index` (None without a split)."""
+    return None if task is None else task.replace(index=index)
+
+
 @struct.dataclass
 class SplitInput:
     """A network input given as its parts: `observation` [..., F] and `action` [..., A], the

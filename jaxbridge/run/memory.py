@@ -65,6 +65,11 @@ def limit_bytes(limit: int | None) -> tuple[int, str]:
     return (available_bytes(), "available") if limit is None else (limit, "allowed by --max-memory")
 
 
+def totals(count: int, each: int, limit: int) -> tuple[int, int]:
+    """(bytes for `count` items of `each` bytes plus the runtime, how many such items fit in `limit`)."""
+    return RUNTIME_BYTES + count * each, max(0, (limit - RUNTIME_BYTES) // each)
+
+
 def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], approaches: list[str], workers: int,
                    limit: int | None = None) -> int:
     """The estimate for `approaches` trained `workers` at a time (the largest together); TooBig if it
@@ -72,9 +77,8 @@ def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], approaches: l
     limit, what = limit_bytes(limit)
     states = sorted((state_bytes(dataclasses.replace(config, approach=a), env_cls) for a in approaches), reverse=True)
     per_seed = STATE_COPIES * sum(states[:max(1, workers)]) + task_bytes(config, env_cls)
-    need = RUNTIME_BYTES + config.num_seeds * per_seed
+    need, fit = totals(config.num_seeds, per_seed, limit)
     if need > limit:
-        fit = max(0, (limit - RUNTIME_BYTES) // per_seed)
         raise TooBig(f"this run needs about {need / 2**30:.1f} GiB ({per_seed / 2**20:.1f} MiB per seed for "
                      f"{', '.join(approaches) if len(approaches) <= 2 else f'{workers} approaches at a time'}, "
                      f"x {config.num_seeds} seeds), more than the {limit / 2**30:.1f} GiB {what}; lower --num-seeds (about {fit} fit)"
@@ -93,9 +97,8 @@ def check_evaluation(env_cls: type[NoveltyEnv], specs: list, limit: int | None =
         bounds = [(first.num_reachable, len(first.ground_ops))]
     states, operators = (max(b[i] for b in bounds) for i in range(2))
     per_task = TABLE_COPIES * tree_bytes(table_shape(states, operators, env.num_atoms))
-    need = RUNTIME_BYTES + len(specs) * per_task
+    need, fit = totals(len(specs), per_task, limit)
     if need > limit:
-        fit = max(0, (limit - RUNTIME_BYTES) // per_task)
         raise TooBig(f"evaluating these {len(specs)} tasks needs about {need / 2**30:.1f} GiB ({per_task / 2**20:.1f} MiB "
                      f"per task for plan tables of {states} states x {operators} operators), more than the "
                      f"{limit / 2**30:.1f} GiB {what}; lower --task-size or --num-tasks (about {fit} tasks fit), "
