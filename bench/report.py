@@ -11,9 +11,10 @@ import sys
 from pathlib import Path
 
 from jaxbridge.learn.approaches import get_approach
-from jaxbridge.run.artifacts import REPORT_CYCLES
-from jaxbridge.run.comparison import write_comparison
+from jaxbridge.run.artifacts import REPORT_CYCLES, report_cells
+from jaxbridge.run.comparison import ci_cell, write_comparison
 from jaxbridge.run.experiments import is_experiment_dir, load_experiment
+from jaxbridge.utils import stats
 
 # reference/results.md: test solve rate, mean [min, max] over the seeds with logs; smooth reward at 100.
 AUTHORS = {
@@ -46,20 +47,17 @@ def main() -> None:
     approaches = [a for a in approaches if (args.experiment / a / "metrics.csv").is_file()]
     rows = write_comparison(args.experiment, config.env, [get_approach(a) for a in approaches])
     authors = AUTHORS.get(config.env, {})
-
-    def cell(row, c):
-        if f"cycle_{c}" not in row:
-            return "-"
-        mean, low, high = row[f"cycle_{c}"]
-        return f"{mean:.2f}" if low == high else f"{mean:.2f} [{low:.1f}, {high:.1f}]"
-
+    seeds = stats.seed_range(sorted({s for row in rows for s in row["seeds"]}))
+    print(f"Seeds {seeds}; mean [95% bootstrap CI] over seeds (the experiment's results.md adds the IQM)\n")
     print(f"| {config.env} | seeds | " + " | ".join(f"cycle {c}" for c in REPORT_CYCLES)
           + " | smooth reward at 100 (test) | smooth training reward at 100 |")
     print("|---|---|" + "---|" * (len(REPORT_CYCLES) + 2))
     for row in rows:
-        print(f"| **{row['label']}** (jaxbridge) | {row['seeds']} | "
-              + " | ".join(cell(row, c) for c in REPORT_CYCLES)
-              + f" | **{row['smooth_test']:.3f}** | {row['smooth_train']:.3f} |")
+        cells = report_cells(row["curves"], row["cycles"])
+        at = cells["test_solve_rate_at"]
+        print(f"| **{row['label']}** (jaxbridge) | {stats.seed_range(row['seeds'])} | "
+              + " | ".join(ci_cell(at[str(c)]) if str(c) in at else "-" for c in REPORT_CYCLES)
+              + f" | **{ci_cell(cells['smooth_reward_final'])}** | {ci_cell(cells['train_smooth_reward_final'])} |")
         if row["approach"] in authors:
             *values, smooth, note = authors[row["approach"]]
             print(f"| {row['label']} (authors, {note}) | | " + " | ".join(values) + f" | {smooth} | |")

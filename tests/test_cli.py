@@ -27,12 +27,18 @@ def short_run(tmp_path_factory):
 def test_train_writes_the_experiment_directory(short_run):
     experiment_dir, proc = short_run
     assert json.loads((experiment_dir / "experiment.json").read_text())["approaches"] == ["ours", "pure_planning"]
-    results = list(csv.DictReader((experiment_dir / "results.csv").open()))
-    assert [r["approach"] for r in results] == ["ours", "pure_planning"]
-    assert all(r["seeds"] == "2" and r["cycles"] == "3" for r in results)
-    assert float(results[1]["test_smooth_reward_final"]) == 0.0  # pure planning never passes a door
+    results = list(csv.DictReader((experiment_dir / "results.csv").open()))  # a row per approach and cycle
+    assert [(r["approach"], r["cycle"]) for r in results] == [(a, str(c)) for a in ("ours", "pure_planning")
+                                                              for c in (1, 2, 3)]
+    assert all(r["seeds"] == "2" for r in results)
+    planning = results[-1]  # pure planning never passes a door: every statistic is 0
+    assert all(float(planning[f"test_solve_rate_{s}"]) == 0.0 for s in ("mean", "mean_low", "iqm_high", "max"))
+    for r in results:
+        assert float(r["test_solve_rate_mean_low"]) <= float(r["test_solve_rate_mean"]) <= float(r["test_solve_rate_mean_high"])
     table = (experiment_dir / "results.md").read_text()
-    assert "| ours | 2 |" in table and "| pure planning | 2 |" in table
+    assert "over seeds 0-1" in table and "## Interquartile mean (IQM) [95% bootstrap CI]" in table
+    assert table.count("| ours | 2 |") == 2  # mean and IQM tables
+    assert table.count("| pure planning | 2 |  |  |  |  | 0.00 | 0.00 |") == 2  # no report cycle in 3 cycles
     assert (experiment_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "pure_planning" in proc.stdout and "ours" in proc.stdout
 
@@ -52,7 +58,10 @@ def test_train_writes_the_run_directory(short_run):
     assert {r["cycle"] for r in rows} == {"1", "2", "3"}
     assert all(0.0 <= float(r["test_solve_rate"]) <= 1.0 for r in rows)
     summary = json.loads((run_dir / "summary.json").read_text())
-    assert summary["cycles"] == 3 and summary["seeds"] == [0, 1]
+    assert summary["cycles"] == 3 and summary["seeds"] == [0, 1] and summary["seed_range"] == "0-1"
+    final = summary["smooth_reward_final"]
+    assert final["mean_ci"][0] <= final["mean"] <= final["mean_ci"][1] and len(final["per_seed"]) == 2
+    assert all(len(v) == 3 for v in summary["per_cycle"]["test_solve_rate"].values())
     config = json.loads((run_dir / "config.json").read_text())
     assert config["config_version"] == 3 and config["num_seeds"] == 2 and config["approach"] == "ours"
     assert (run_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

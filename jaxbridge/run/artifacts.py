@@ -11,14 +11,15 @@ from pathlib import Path
 
 import numpy as np
 
+from jaxbridge.utils import stats
 from jaxbridge.utils.files import write_atomic
 from jaxbridge.utils.smoothing import smooth
 
 METRIC_FIELDS = ("test_solve_rate", "train_success_rate", "train_env_steps", "train_decisions", "test_env_steps",
                  "epsilon", "loss", "q_abs_max", "buffer_size", "table_misses")
 REPORT_CYCLES = (10, 25, 50, 100)
-
-
+STATISTICS_NOTE = (f"over seeds: mean and interquartile mean (IQM), each with its 95% percentile-bootstrap interval "
+                   f"({stats.REPS} replicates, fixed generator), min and max")
 
 
 def history_arrays(history: list) -> dict[str, np.ndarray]:
@@ -39,25 +40,48 @@ def metrics_csv(history: list, seeds: list[int]) -> str:
     return out.getvalue()
 
 
+def curve_statistics(test_rates: np.ndarray, train_rates: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """Per cycle, over seeds ([seeds, cycles] in): mean and IQM with 95% bootstrap intervals, min and max
+    (utils/stats.describe) of the test solve rate and of the test and training smooth rewards."""
+    series = {"test_solve_rate": test_rates, "test_smooth_reward": smooth(test_rates),
+              "train_smooth_reward": smooth(train_rates)}
+    return {name: stats.describe(values) for name, values in series.items()}
+
+
+def at_cycle(described: dict[str, np.ndarray], cycle: int) -> dict:
+    """One table cell of a described curve: {mean, mean_ci, iqm, iqm_ci, min, max} at `cycle` (1-based)."""
+    value = {key: float(v[cycle - 1]) for key, v in described.items()}
+    cell = {}
+    for name in stats.STATISTICS:
+        cell[name] = value[name]
+        cell[f"{name}_ci"] = [value[f"{name}_low"], value[f"{name}_high"]]
+    return {**cell, "min": value["min"], "max": value["max"]}
+
+
+def report_cells(curves: dict[str, dict[str, np.ndarray]], cycles: int) -> dict:
+    """The cells of the results tables (at_cycle) from curve_statistics over `cycles` cycles: the test solve
+    rate at the report cycles reached, the test and training smooth rewards at the last cycle."""
+    return {"test_solve_rate_at": {str(c): at_cycle(curves["test_solve_rate"], c) for c in REPORT_CYCLES if c <= cycles},
+            "smooth_reward_final": at_cycle(curves["test_smooth_reward"], cycles),
+            "train_smooth_reward_final": at_cycle(curves["train_smooth_reward"], cycles)}
+
+
 def summary(history: list, seeds: list[int], elapsed_s: float, devices: str | None = None) -> dict:
-    """Headline numbers: the tables of reference/results.md, for this run (`devices`: what ran it, e.g.
-    "2 cpu"; informational, the numbers do not depend on it)."""
+    """Headline numbers: the tables of reference/results.md for this run, as statistics over its seeds
+    (`devices`: what ran it, e.g. "2 cpu"; informational, the numbers do not depend on it)."""
     arrays = history_arrays(history)
-    rates = arrays["test_solve_rate"]
-    test_smooth = smooth(rates)
-    cycles = rates.shape[1]
-
-    def at(c):
-        return {"mean": float(rates[:, c - 1].mean()), "min": float(rates[:, c - 1].min()),
-                "max": float(rates[:, c - 1].max())}
-
+    curves = curve_statistics(arrays["test_solve_rate"], arrays["train_success_rate"])
+    cycles = len(history)
+    cells = report_cells(curves, cycles)
     return {
-        "seeds": seeds, "cycles": cycles, "elapsed_s": round(elapsed_s, 2),
+        "seeds": seeds, "seed_range": stats.seed_range(seeds), "cycles": cycles, "elapsed_s": round(elapsed_s, 2),
         **({"devices": devices} if devices else {}),
-        "test_solve_rate_at": {str(c): at(c) for c in REPORT_CYCLES if c <= cycles},
-        "smooth_reward_final": {"mean": float(test_smooth[:, -1].mean()),
-                                "per_seed": [round(float(x), 4) for x in test_smooth[:, -1]]},
-        "mean_test_solve_rate_per_cycle": [round(float(x), 4) for x in rates.mean(0)],
+        "statistics": STATISTICS_NOTE,
+        **cells,
+        "smooth_reward_final": {**cells["smooth_reward_final"],
+                                "per_seed": [round(float(x), 4) for x in smooth(arrays["test_solve_rate"])[:, -1]]},
+        "per_cycle": {name: {key: [round(float(x), 4) for x in v] for key, v in described.items()}
+                      for name, described in curves.items()},
         "train_success_rate_final": float(arrays["train_success_rate"][:, -1].mean()),
         "train_env_steps_total": int(arrays["train_env_steps"].sum()),
         "bridge_decisions_total": int(arrays["train_decisions"].sum()),
@@ -65,27 +89,29 @@ def summary(history: list, seeds: list[int], elapsed_s: float, devices: str | No
     }
 
 
-def plot_curves(curves: dict[str, dict[str, np.ndarray]], title: str) -> bytes:
-    """PNG of test and training smooth reward vs cycle: one line per approach (mean over seeds) with a
-    band from the lowest to the highest seed. curves: {label: {"test": [seeds, cycles], "train": ...}}."""
+def plot_curves(curves: dict[str, dict[str, dict[str, np.ndarray]]], title: str) -> bytes:
+    """PNG of test and training smooth reward vs cycle: one line per approach (mean over seeds), its 95%
+    bootstrap interval as a band and the lowest to highest seed as a lighter one.
+    curves: {label: curve_statistics(...)}."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
-    for ax, key, name in zip(axes, ("test", "train"), ("test", "training")):
-        for label, data in curves.items():
-            values = smooth(data[key])
-            x = np.arange(1, values.shape[1] + 1)
-            line, = ax.plot(x, values.mean(0), label=label)
-            ax.fill_between(x, values.min(0), values.max(0), color=line.get_color(), alpha=0.2)
+    for ax, key, name in zip(axes, ("test_smooth_reward", "train_smooth_reward"), ("test", "training")):
+        for label, described in curves.items():
+            values = described[key]
+            x = np.arange(1, len(values["mean"]) + 1)
+            line, = ax.plot(x, values["mean"], label=label)
+            ax.fill_between(x, values["mean_low"], values["mean_high"], color=line.get_color(), alpha=0.3, lw=0)
+            ax.fill_between(x, values["min"], values["max"], color=line.get_color(), alpha=0.08, lw=0)
         ax.set_xlabel("online learning cycle")
         ax.set_title(f"{name} smooth reward")
         ax.set_ylim(-0.02, 1.02)
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("smooth reward (25-cycle window / 25)")
     axes[0].legend(loc="lower right")
-    fig.suptitle(title)
+    fig.suptitle(title + "; mean, 95% CI (dark band), min-max (light band)", fontsize=10)
     fig.tight_layout()
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
@@ -93,12 +119,10 @@ def plot_curves(curves: dict[str, dict[str, np.ndarray]], title: str) -> bytes:
     return buffer.getvalue()
 
 
-def write_run_files(run_dir: Path, config_dict: dict, history: list, seeds: list[int], elapsed_s: float,
-                    label: str = "ours", devices: str | None = None) -> dict:
-    arrays = history_arrays(history)
-    info = summary(history, seeds, elapsed_s, devices)
-    write_atomic(run_dir / "metrics.csv", metrics_csv(history, seeds))
+def write_run_files(run_dir: Path, config_dict: dict, history: list, info: dict, label: str = "ours") -> None:
+    """metrics.csv, summary.json (`info`, this run's summary) and curves.png of a run."""
+    write_atomic(run_dir / "metrics.csv", metrics_csv(history, info["seeds"]))
     write_atomic(run_dir / "summary.json", json.dumps(info, indent=2) + "\n")
-    curves = {label: {"test": arrays["test_solve_rate"], "train": arrays["train_success_rate"]}}
-    write_atomic(run_dir / "curves.png", plot_curves(curves, f"{config_dict['env']}, {len(seeds)} seeds"))
-    return info
+    curves = {label: {name: {k: np.asarray(v) for k, v in described.items()}
+                      for name, described in info["per_cycle"].items()}}
+    write_atomic(run_dir / "curves.png", plot_curves(curves, f"{config_dict['env']}, seeds {info['seed_range']}"))

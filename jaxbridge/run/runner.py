@@ -156,10 +156,10 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
     finally:
         if own_bar:
             bar.close()
-        if done[1] and not unwritable:  # the files always describe the cycles completed so far
-            artifacts.write_run_files(run_dir, config.to_dict(), done[1], config.seeds, elapsed(),
-                                      label=setup.approach.label, devices=describe(seeds.devices))
-    return artifacts.summary(done[1], config.seeds, elapsed(), describe(seeds.devices))
+        info = artifacts.summary(done[1], config.seeds, elapsed(), describe(seeds.devices)) if done[1] else None
+        if info and not unwritable:  # the files always describe the cycles completed so far
+            artifacts.write_run_files(run_dir, config.to_dict(), done[1], info, label=setup.approach.label)
+    return info
 
 
 def load_learners(run_dir: Path) -> tuple[Setup, object, int]:

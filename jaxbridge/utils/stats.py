@@ -1,0 +1,76 @@
+"""Statistics over seeds that hold across machines: mean and interquartile mean (IQM) with 95% bootstrap
+confidence intervals, the protocol of Agarwal et al. 2021 ("Deep RL at the edge of the statistical
+precipice").
+
+A table's cell summarises one approach on one env, so the stratified bootstrap (resampling runs within
+each task) is the plain bootstrap over seeds: each replicate draws the seeds with replacement and
+recomputes the statistic; the interval is the replicates' 2.5th and 97.5th percentiles. The resampling
+uses a fixed generator, so the same metrics give the same intervals on every machine.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+CONFIDENCE = 0.95
+REPS = 2_000  # bootstrap replicates per interval, as rliable's curves (its endpoints move by ~0.01 at 32 seeds)
+
+
+def mean(scores: np.ndarray, axis: int = 0) -> np.ndarray:
+    return np.mean(scores, axis=axis)
+
+
+def iqm(scores: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Interquartile mean: the mean of what is left after cutting int(n/4) runs from each end (of n along
+    `axis`), i.e. scipy.stats.trim_mean(scores, 0.25)."""
+    ordered = np.sort(scores, axis=axis)
+    n = ordered.shape[axis]
+    cut = int(0.25 * n)
+    return np.take(ordered, np.arange(cut, n - cut), axis=axis).mean(axis=axis)
+
+
+STATISTICS: dict[str, Callable[[np.ndarray, int], np.ndarray]] = {"mean": mean, "iqm": iqm}
+
+
+def bootstrap_ci(scores: np.ndarray, statistic: Callable[[np.ndarray, int], np.ndarray] = mean, reps: int = REPS,
+                 confidence: float = CONFIDENCE, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) of the percentile bootstrap interval of `statistic` over the runs of `scores` [runs, ...]
+    (every trailing entry, e.g. each cycle, gets its interval from the same resampled runs)."""
+    scores = np.asarray(scores, np.float64)
+    runs = scores.shape[0]
+    draws = np.random.default_rng(seed).integers(0, runs, size=(reps, runs))
+    replicates = statistic(scores[draws], 1)  # [reps, ...]
+    tail = 100 * (1 - confidence) / 2
+    low, high = np.percentile(replicates, [tail, 100 - tail], axis=0)
+    return low, high
+
+
+def describe(scores: np.ndarray, reps: int = REPS) -> dict[str, np.ndarray]:
+    """Every statistic of the tables for `scores` [runs, ...]: mean and IQM, each with its 95% interval
+    (`mean_low`, `mean_high`, ...), and the lowest and highest run."""
+    scores = np.asarray(scores, np.float64)
+    out = {}
+    for name, statistic in STATISTICS.items():
+        out[name] = statistic(scores, 0)
+        out[f"{name}_low"], out[f"{name}_high"] = bootstrap_ci(scores, statistic, reps)
+    out["min"], out["max"] = scores.min(0), scores.max(0)
+    return out
+
+
+def ci_text(value: float, interval) -> str:
+    """"0.85 [0.70, 0.95]": a statistic and its interval (the value alone where the interval is one point)."""
+    low, high = interval
+    return f"{value:.2f}" if low == high else f"{value:.2f} [{low:.2f}, {high:.2f}]"
+
+
+def seed_range(seeds: list[int]) -> str:
+    """The seeds in words: "100-131", "0-3, 7"."""
+    seeds = sorted(seeds)
+    spans, start = [], None
+    for i, s in enumerate(seeds):
+        start = s if start is None else start
+        if i + 1 == len(seeds) or seeds[i + 1] != s + 1:
+            spans.append(f"{start}" if start == s else f"{start}-{s}")
+            start = None
+    return ", ".join(spans)
