@@ -26,7 +26,8 @@ from bench.training import AUTHORS_WHOLE_RUN_S  # one seed-run of "ours", per en
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import describe, device_count_arg, select_devices
-from jaxbridge.run.experiments import default_workers, train_approaches
+from jaxbridge.learn.devices import default_workers
+from jaxbridge.run.experiments import train_approaches
 
 
 def main() -> None:

@@ -99,7 +99,7 @@ def test_seed_padding_round_trips():
 
 
 def test_concurrent_approaches_split_the_devices_between_them():
-    from jaxbridge.run.experiments import split_devices
+    from jaxbridge.learn.devices import split_devices
     devices = ["d0", "d1", "d2", "d3"]  # only their identity matters here
     assert split_devices(devices, 2) == [["d0", "d2"], ["d1", "d3"]]
     assert split_devices(devices, 3) == [["d0", "d3"], ["d1"], ["d2"]]

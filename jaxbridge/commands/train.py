@@ -57,8 +57,8 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
                    interrupts=None) -> tuple[Path, Callable[[], dict]]:
     """(experiment directory, the training to run) of a new experiment; the directory is locked. A run
     whose memory estimate exceeds `max_memory` GiB (default: what is available) is refused first."""
+    from jaxbridge.learn.devices import default_workers
     from jaxbridge.run import memory, rundir
-    from jaxbridge.run.experiments import default_workers, train_approaches
 
     if name is not None:
         try:
@@ -81,6 +81,7 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
         raise UsageError(str(err)) from None
     except OSError as err:
         raise UsageError(f"cannot write experiment directory {out / (name or env_cls.name)}: {err.strerror}") from None
+    from jaxbridge.run.experiments import train_approaches  # after the refusals: it loads orbax (~0.2 s)
     return out_dir, _releasing(lock, lambda: train_approaches(config, approaches, out_dir, progress, workers=workers,
                                                               devices=devices, replaced=replaced, **_watch(interrupts)))
 
@@ -152,13 +153,9 @@ EXIT_NUMERICAL, EXIT_CANNOT_WRITE = 3, 4
 def main(args, devices: list) -> int:
     """train.py after its flags: start or resume, train with Ctrl-C as requests, report; the exit code."""
     from jaxbridge.commands.interrupts import EXIT_INTERRUPTED, Interrupts, run_watched
-    from jaxbridge.run import checkpoint
-    from jaxbridge.run.experiments import is_experiment_dir
     from jaxbridge.run.rundir import release_held
-    from jaxbridge.run.runner import Interrupted, NumericalFault
     from jaxbridge.utils.files import WriteError
 
-    checkpoint.QUIET = not args.debug
     start, progress = time.perf_counter(), not args.no_progress
     interrupts = Interrupts(on_exit=release_held)
     if args.resume is not None:
@@ -167,6 +164,11 @@ def main(args, devices: list) -> int:
     else:
         out_dir, run = new_experiment(vars(args), args.approaches, args.out, args.name, args.overwrite, progress,
                                       args.workers, devices, args.max_memory, interrupts)
+    from jaxbridge.run import checkpoint
+    from jaxbridge.run.experiments import is_experiment_dir
+    from jaxbridge.run.runner import Interrupted, NumericalFault
+
+    checkpoint.QUIET = not args.debug
     try:
         summaries = run_watched(run)
     except checkpoint.CheckpointError as err:

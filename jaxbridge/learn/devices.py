@@ -63,6 +63,20 @@ def select_devices(request: str | int = "auto") -> list:
     return devices[:request]
 
 
+def default_workers(approaches: list[str]) -> int:
+    """Approaches trained at the same time by default: one per CPU core, at most one per approach."""
+    return max(1, min(len(approaches), os.cpu_count() or 1))
+
+
+def split_devices(devices: list | None, workers: int) -> list:
+    """One share of `devices` per worker (approach trained at the same time): as even as possible, every
+    device in one share; with fewer devices than workers, every worker gets all of them (None stays None:
+    the default device)."""
+    if not devices or len(devices) < workers:
+        return [devices] * workers
+    return [devices[i::workers] for i in range(workers)]
+
+
 def describe(devices) -> str:
     """E.g. "2 cpu"."""
     kinds = sorted({d.platform for d in devices})

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import queue
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
@@ -19,6 +18,7 @@ from pathlib import Path
 from envs_jax import env_class
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.approaches import get_approach
+from jaxbridge.learn.devices import default_workers, split_devices
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint, comparison, rundir
 from jaxbridge.run.runner import Interrupted, train
@@ -43,18 +43,6 @@ def load_experiment(experiment_dir: Path) -> tuple[TrainConfig, list[str]]:
         return TrainConfig.from_dict(data["config"]), list(data["approaches"])
     except (OSError, KeyError, TypeError, json.JSONDecodeError) as err:
         raise ValueError(f"{experiment_dir / EXPERIMENT_FILE} is not a valid experiment file: {err}") from None
-
-
-def default_workers(approaches: list[str]) -> int:
-    return max(1, min(len(approaches), os.cpu_count() or 1))
-
-
-def split_devices(devices: list | None, workers: int) -> list:
-    """One share of `devices` per worker: as even as possible, every device in one share; with fewer
-    devices than workers, every worker gets all of them (None stays None: the default device)."""
-    if not devices or len(devices) < workers:
-        return [devices] * workers
-    return [devices[i::workers] for i in range(workers)]
 
 
 def check_resumable(experiment_dir: Path, approaches: list[str]) -> None:
