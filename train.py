@@ -30,6 +30,7 @@ from pathlib import Path
 from envs_jax import registered
 from jaxbridge.commands import train as command
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.presets import PRESETS
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.learn.devices import device_count_arg, select_devices
 from jaxbridge.utils import compile_cache
@@ -57,6 +58,13 @@ def parse_args(argv):
     d = DEFAULTS
     p.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(registered())}, or package.module:Class "
                                               f"for an env of your own (checked first; docs/NEW_ENV.md) (default: {d.env})")
+    p.add_argument("--preset", choices=list(PRESETS), default=None,
+                   help="the values a run starts from: " + "; ".join(f"{k}: {v}" for k, v in PRESETS.items())
+                        + " (flags below override it; config.json records every resolved value) (default: jaxbridge)")
+    p.add_argument("--test-protocol", metavar="NAME",
+                   help="which of the env's test-task distributions to evaluate on, e.g. authors: Coffee's 4 cups "
+                        "with horizon 100, Light Switch Door's fixed horizon 30 (default: the preset's, else the "
+                        "env's first)")
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: all, the paper's six: "
                         f"{', '.join(APPROACHES)}; doorknobs: all but no_feature_selection and maple_q)")

@@ -34,7 +34,7 @@ def fresh_policy(env: str, num_seeds: int) -> TrainedPolicy:
 
 def measure(policy: TrainedPolicy, tasks: int) -> dict:
     start = time.perf_counter()
-    batch = evaluation_batch(policy.setup.env_cls, policy.config.seeds, tasks)
+    batch = evaluation_batch(policy.setup.env_cls, policy.config.seeds, tasks, protocol=policy.config.test_protocol)
     build = time.perf_counter() - start
 
     def timed_run():

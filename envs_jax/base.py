@@ -129,6 +129,12 @@ class NoveltyEnv(abc.ABC):
     why_not_all: ClassVar[str] = ""
     # The sizes `sized_task` takes (name -> what it counts), e.g. {"cells": ..., "doors": ...}.
     task_sizes: ClassVar[dict[str, str]] = {}
+    # The test-task distributions `test_tasks` draws (name -> what it is), the first the default; an env
+    # with more than one takes `protocol=` in test_tasks (e.g. "authors": the authors' logged runs).
+    test_protocols: ClassVar[dict[str, str]] = {"jaxbridge": "the env's test tasks"}
+    # Training hyperparameters of the authors' code where this env's differ from the common ones
+    # (jaxbridge/core/presets.py, `train.py --preset authors`).
+    authors_defaults: ClassVar[dict] = {}
 
     # ---- host: tasks and the planner's model -------------------------------------------------------
     @staticmethod
@@ -139,7 +145,7 @@ class NoveltyEnv(abc.ABC):
     @staticmethod
     @abc.abstractmethod
     def test_tasks(seed: int, num_tasks: int = 10) -> list[TaskSpec]:
-        """The seed's test tasks."""
+        """The seed's test tasks (an env with several `test_protocols` also takes `protocol=NAME`)."""
 
     @classmethod
     @abc.abstractmethod

@@ -19,7 +19,7 @@ def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
     proc = run("train.py", "--num-seeds", "2", "--cycles", "3", "--updates-per-cycle", "10",
                "--checkpoint-every", "2", "--out", str(out), "--name", "tiny",
-               "--approaches", "ours,pure_planning")
+               "--approaches", "ours,pure_planning", "--preset", "authors")
     assert proc.returncode == 0, proc.stderr
     return out / "tiny", proc
 
@@ -63,7 +63,11 @@ def test_train_writes_the_run_directory(short_run):
     assert final["mean_ci"][0] <= final["mean"] <= final["mean_ci"][1] and len(final["per_seed"]) == 2
     assert all(len(v) == 3 for v in summary["per_cycle"]["test_solve_rate"].values())
     config = json.loads((run_dir / "config.json").read_text())
-    assert config["config_version"] == 3 and config["num_seeds"] == 2 and config["approach"] == "ours"
+    assert config["config_version"] == 4 and config["num_seeds"] == 2 and config["approach"] == "ours"
+    # --preset authors, resolved: the authors' values in every field they set (jaxbridge/core/presets.py)
+    assert config["preset"] == "authors" and config["test_protocol"] == "authors"
+    assert (config["batch_size"], config["n_sample"], config["n_target_sample"], config["polyak_per"],
+            config["call_planner_bonus"], config["updates_per_cycle"]) == (64, 100, 1, "decision", 0.5, 10)
     assert (run_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in (run_dir / "checkpoints").iterdir() if p.name.isdigit()) == ["2", "3"]
     assert "done in" in proc.stdout
@@ -158,6 +162,9 @@ def test_an_existing_run_is_not_overwritten(short_run):
      "seed 2's training task needs at least 12 steps"),
     (["train.py", "--num-seeds", "3", "--seed-block", "4"], "--seed-block 4 is larger than the 3 seeds"),
     (["train.py", "--seed-block", "0"], "positive integer"),
+    (["train.py", "--preset", "theirs"], "invalid choice: 'theirs'"),
+    (["train.py", "--env", "doorknobs", "--test-protocol", "authors"], "--test-protocol 'authors': doorknobs has jaxbridge"),
+    (["eval.py", "--env", "doorknobs", "--test-protocol", "authors"], "doorknobs has no test protocol 'authors'"),
     (["eval.py", "--bridge", "clever"], "invalid choice"),
     (["eval.py", "/nonexistent/run"], "not a run directory"),
     (["eval.py", "--num-seeds", "x"], "positive integer"),

@@ -105,6 +105,8 @@ class Coffee(NoveltyEnv):
     train_steps = TRAIN_STEPS
     # Fewer updates: a cycle yields few bridge decisions, and 1000 updates overfit them (docs/RESULTS.md, Coffee).
     train_defaults: ClassVar[dict] = {"updates_per_cycle": 250}
+    test_protocols = world.TEST_PROTOCOLS
+    authors_defaults: ClassVar[dict] = {"n_sample": 10, "test_protocol": "authors"}
 
     @property
     def full_state_fits(self) -> bool:

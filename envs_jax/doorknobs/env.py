@@ -138,6 +138,7 @@ class Doorknobs(NoveltyEnv):
     # Chosen on the tuning seeds (docs/RESULTS.md, Doorknobs): the CallPlanner bonus breaks the tie with walking
     # through the opened door; fewer updates and the clipped, twin-network targets stop the Q drift.
     train_defaults = {"call_planner_bonus": 0.5, "updates_per_cycle": 150, "clip_bootstrap": True, "q_ensemble": 2}
+    authors_defaults = {"n_sample": 10}
     # The full-state ablations (2027 inputs) run only when asked (docs/PERFORMANCE.md).
     default_approaches = ("ours", "no_callplanner", "random", "pure_planning")
     why_not_all = "their full state is 2027 values wide: all six take ~11 minutes on 2 cores, these four ~4"

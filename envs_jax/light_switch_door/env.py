@@ -26,6 +26,7 @@ TEST_CELLS_RANGE = (10, 20)  # inclusive
 TEST_DOORS_RANGE = (2, 4)  # inclusive
 TEST_DOOR_CELLS = 9  # test doors are drawn from cells 0..8 (the authors' test_grid_row_num_cells - 1)
 TRAIN_STEPS = 100
+AUTHORS_HORIZON = 30  # the authors' code's test horizon (the paper's table: max(30, h + 5))
 SWEEP_CELLS, SWEEP_DOORS = 60, tuple(range(1, 17))  # eval.py --sweep: 1..16 doors in a row of 60 cells
 
 
@@ -35,6 +36,7 @@ class LightSwitchDoorTask:
 
     num_cells: int
     door_cells: tuple[int, ...]
+    fixed_horizon: int | None = None  # the authors' code's fixed test horizon, instead of the paper's rule
 
     def describe(self) -> str:
         return f"{self.num_cells} cells, {len(self.door_cells)} doors"
@@ -52,8 +54,8 @@ class LightSwitchDoorTask:
 
     @property
     def horizon(self) -> int:
-        """The paper's test horizon max(30, h + 5) (the authors' code used a fixed 30)."""
-        return max(30, self.shortest_solution + 5)
+        """The paper's test horizon max(30, h + 5), or the authors' code's fixed 30 (`fixed_horizon`)."""
+        return self.fixed_horizon or max(30, self.shortest_solution + 5)
 
 
 def train_task(seed: int) -> LightSwitchDoorTask:
@@ -62,13 +64,19 @@ def train_task(seed: int) -> LightSwitchDoorTask:
     return LightSwitchDoorTask(TRAIN_CELLS, (int(rng.choice([1, 2, 3])) - 1,))
 
 
-def test_tasks(seed: int, num_tasks: int = 10) -> list[LightSwitchDoorTask]:
-    """N cells and K doors drawn once per seed; each task draws K distinct door cells in 0..8."""
+TEST_PROTOCOLS = {"jaxbridge": "horizon max(30, h + 5), the paper's",
+                  "authors": f"horizon {AUTHORS_HORIZON}, the authors' code (seed 2's 20 cells and 3 doors need 32 steps)"}
+
+
+def test_tasks(seed: int, num_tasks: int = 10, protocol: str = "jaxbridge") -> list[LightSwitchDoorTask]:
+    """N cells and K doors drawn once per seed; each task draws K distinct door cells in 0..8. The
+    protocol sets the horizon only (TEST_PROTOCOLS)."""
     rng = np.random.default_rng(seed + 10000)
     num_cells = int(rng.integers(TEST_CELLS_RANGE[0], TEST_CELLS_RANGE[1] + 1))
     num_doors = int(rng.integers(TEST_DOORS_RANGE[0], TEST_DOORS_RANGE[1] + 1))
+    fixed = {"jaxbridge": None, "authors": AUTHORS_HORIZON}[protocol]
     return [LightSwitchDoorTask(num_cells, tuple(int(c) for c in rng.choice(TEST_DOOR_CELLS, num_doors,
-                                                                             replace=False)))
+                                                                             replace=False)), fixed)
             for _ in range(num_tasks)]
 
 
@@ -164,6 +172,8 @@ class LightSwitchDoor(NoveltyEnv):
                                  horizon=lambda spec: spec.horizon)
 
     task_sizes = {"cells": "cells in the row", "doors": "doors, in distinct cells but the light's"}
+    test_protocols = TEST_PROTOCOLS
+    authors_defaults = {"n_sample": 100, "test_protocol": "authors"}
 
     @classmethod
     def sized_task(cls, rng: np.random.Generator, cells: int, doors: int) -> LightSwitchDoorTask:

@@ -130,6 +130,12 @@ def sized_tasks(sizes: dict[str, int] | None, env_cls):
     return lambda rng: env_cls.sized_task(rng, **sizes)
 
 
+def protocol_note(env_cls, protocol: str | None) -> str:
+    """", authors' protocol: 4 cups per task, ..." where the test tasks are not the env's default ones."""
+    default = next(iter(env_cls.test_protocols))
+    return "" if protocol in (None, default) else f" ({protocol} protocol: {env_cls.test_protocols[protocol]})"
+
+
 def max_memory_bytes(args) -> int | None:
     return None if args.max_memory is None else int(args.max_memory * 2**30)
 
@@ -246,10 +252,10 @@ def run(args) -> int:
     env_cls = load_env(args.env)
     seeds = list(range(args.first_seed, args.first_seed + args.num_seeds))
     start = time.perf_counter()
-    specs, owners = evaluation_specs(env_cls, seeds, args.num_tasks)
     try:
+        specs, owners = evaluation_specs(env_cls, seeds, args.num_tasks, args.test_protocol)
         check_evaluation(env_cls, specs, max_memory_bytes(args))
-    except TooBig as err:
+    except (ValueError, TooBig) as err:
         raise UsageError(str(err)) from None
     batch = make_batch(env_cls, specs, owners, progress=SlowWork(f"{env_cls.name}: test tasks and plan tables"))
     check_render_task(args, batch.size)
@@ -258,7 +264,7 @@ def run(args) -> int:
     except ValueError as err:
         raise UsageError(str(err)) from None
     result = run_bridge(batch, bridge, seed=args.rollout_seed)
-    print(f"{args.env}, bridge = {args.bridge}, {batch.size} test tasks "
+    print(f"{args.env}, bridge = {args.bridge}, {batch.size} test tasks{protocol_note(env_cls, args.test_protocol)} "
           f"({time.perf_counter() - start:.1f} s including compilation)")
     print(format_table(summarise(batch, result)))
     if args.render is not None or args.gif is not None:

@@ -9,13 +9,14 @@ from typing import Callable
 
 from jaxbridge.commands.envs import load_env
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.presets import preset_values
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.utils.cli import UsageError
 from jaxbridge.utils.stats import ci_text
 
 # train.py flags that set the run's config (flag name = config field); --resume takes the saved config.
-CONFIG_FLAGS = ("env", "num_seeds", "first_seed", "cycles", "episodes_per_cycle", "train_steps", "updates_per_cycle",
-                "batch_size", "call_planner_bonus", "checkpoint_every", "seed_block")
+CONFIG_FLAGS = ("env", "preset", "test_protocol", "num_seeds", "first_seed", "cycles", "episodes_per_cycle",
+                "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus", "checkpoint_every", "seed_block")
 
 
 def make_config(flags: dict) -> tuple[TrainConfig, type]:
@@ -24,7 +25,10 @@ def make_config(flags: dict) -> tuple[TrainConfig, type]:
     given = {field: flags[field] for field in CONFIG_FLAGS if flags.get(field) is not None}
     spec = given.pop("env", TrainConfig.env)
     env_cls = load_env(spec)
-    config = TrainConfig(env=spec, **{**env_cls.train_defaults, **given})
+    config = TrainConfig(env=spec, **{**preset_values(given.pop("preset", TrainConfig.preset), env_cls), **given})
+    if config.test_protocol not in env_cls.test_protocols:
+        raise UsageError(f"--test-protocol {config.test_protocol!r}: {env_cls.name} has "
+                         f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}")
     if config.episodes_per_cycle * config.train_steps > config.buffer_capacity:
         raise UsageError(f"--episodes-per-cycle x {config.train_steps} steps must fit the replay buffer "
                          f"({config.buffer_capacity} transitions)")

@@ -6,8 +6,9 @@ import dataclasses
 from dataclasses import dataclass
 
 # 2: `approach` (version 1 configs were all "ours" and still load); 3: `split_task_state` (older runs
-# stored whole observations and load with it off)
-CONFIG_VERSION = 3
+# stored whole observations and load with it off); 4: `preset`, `test_protocol` (older runs were the
+# jaxbridge preset on the env's own test tasks, which their defaults say)
+CONFIG_VERSION = 4
 
 
 @dataclass(frozen=True)
@@ -17,6 +18,12 @@ class TrainConfig:
     approach: str = "ours"
     """Which of the paper's approaches (jaxbridge/learn/approaches.py): ours, no_feature_selection,
     no_callplanner, random, pure_planning, maple_q."""
+    preset: str = "jaxbridge"
+    """The named set of values the run started from (jaxbridge/core/presets.py): jaxbridge (ours) or
+    authors (the authors' code where ours differs); every resolved value is in this config."""
+    test_protocol: str = "jaxbridge"
+    """Which of the env's test-task distributions (`test_protocols` of the env) the run is evaluated on,
+    e.g. Coffee's authors: 4 cups, horizon 100; Light Switch Door's authors: horizon 30."""
     num_seeds: int = 8
     """Independent seeds, trained together in one vectorised computation."""
     seed_block: int = 1
@@ -94,7 +101,7 @@ class TrainConfig:
             data.setdefault("approach", "ours")
         if version in (1, 2):
             data.setdefault("split_task_state", False)
-        elif version != CONFIG_VERSION:
+        elif version not in (3, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields
@@ -105,11 +112,12 @@ class TrainConfig:
         return cls(**data)
 
     @classmethod
-    def for_env(cls, env: str, **overrides) -> "TrainConfig":
-        """The config for `env`: these defaults, then the env's own (`train_defaults` of its class, each
-        documented there), then `overrides`."""
+    def for_env(cls, env: str, preset: str = "jaxbridge", **overrides) -> "TrainConfig":
+        """The config for `env`: these defaults, then the preset's values for it (jaxbridge: the env's own
+        `train_defaults`, each documented there; jaxbridge/core/presets.py), then `overrides`."""
         from envs_jax import env_class
-        return cls(env=env, **{**env_class(env).train_defaults, **overrides})
+        from jaxbridge.core.presets import preset_values
+        return cls(env=env, **{**preset_values(preset, env_class(env)), **overrides})
 
     @property
     def seeds(self) -> list[int]:

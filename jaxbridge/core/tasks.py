@@ -67,17 +67,29 @@ def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizon
     return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(seeds), compiled=compiled, arrays=arrays)
 
 
-def evaluation_specs(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10) -> tuple[list, list[int]]:
+def test_specs(env_cls: type[NoveltyEnv], seed: int, num_tasks: int = 10, protocol: str | None = None) -> list:
+    """The seed's test tasks under one of the env's `test_protocols` (None: its default, the first);
+    ValueError for a protocol the env does not have."""
+    default = next(iter(env_cls.test_protocols))
+    if protocol is None or protocol == default:
+        return env_cls.test_tasks(seed, num_tasks)  # an env with one protocol need not take the keyword
+    if protocol not in env_cls.test_protocols:
+        raise ValueError(f"{env_cls.name} has no test protocol {protocol!r}; it has {', '.join(env_cls.test_protocols)}")
+    return env_cls.test_tasks(seed, num_tasks, protocol=protocol)
+
+
+def evaluation_specs(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10,
+                     protocol: str | None = None) -> tuple[list, list[int]]:
     """Every seed's test tasks (seed-major order) and the seed each belongs to."""
     specs, owners = [], []
     for seed in seeds:
-        tasks = env_cls.test_tasks(seed, num_tasks)
+        tasks = test_specs(env_cls, seed, num_tasks, protocol)
         specs += tasks
         owners += [seed] * len(tasks)
     return specs, owners
 
 
 def evaluation_batch(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10,
-                     progress: Callable[[int, int], None] | None = None) -> TaskBatch:
+                     progress: Callable[[int, int], None] | None = None, protocol: str | None = None) -> TaskBatch:
     """Every seed's test tasks in one batch (seed-major order)."""
-    return make_batch(env_cls, *evaluation_specs(env_cls, seeds, num_tasks), progress=progress)
+    return make_batch(env_cls, *evaluation_specs(env_cls, seeds, num_tasks, protocol), progress=progress)

@@ -12,7 +12,7 @@ import jax.numpy as jnp
 from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
+from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.dqn import DQN, Learner, init_learner, make_dqn
 from jaxbridge.learn.q_bridge import task_state_split
@@ -55,7 +55,7 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     env_cls = env_cls or env_class(config.env)
     approach = get_approach(config.approach)
     train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
-    test_env = env_cls.for_tasks([t for s in config.seeds for t in env_cls.test_tasks(s, config.num_test_tasks)])
+    test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0])
     split = task_state_split(train_env) if approach.controls.full_state and config.split_task_state else None
     dqn = make_dqn(config, train_env, approach.observation_size(train_env), split)
     return Setup(config, env_cls, approach, train_env, test_env, dqn)
@@ -66,12 +66,12 @@ _TASKS_LOCK = threading.Lock()
 
 @lru_cache(maxsize=4)
 def _build_tasks(env_cls: type[NoveltyEnv], seeds: tuple[int, ...], episodes: int, train_steps: int,
-                 num_test_tasks: int) -> tuple[TaskBatch, TaskBatch]:
+                 num_test_tasks: int, test_protocol: str) -> tuple[TaskBatch, TaskBatch]:
     train_specs = [env_cls.train_task(s) for s in seeds for _ in range(episodes)]
     train_owner = [s for s in seeds for _ in range(episodes)]
     train = make_batch(env_cls, train_specs, train_owner, horizons=[train_steps] * len(train_specs),
                        progress=SlowWork(f"{env_cls.name}: training tasks and plan tables"))
-    return train, evaluation_batch(env_cls, list(seeds), num_test_tasks,
+    return train, evaluation_batch(env_cls, list(seeds), num_test_tasks, protocol=test_protocol,
                                    progress=SlowWork(f"{env_cls.name}: test tasks and plan tables"))
 
 
@@ -85,4 +85,4 @@ def task_batches(setup: Setup) -> tuple[TaskBatch, TaskBatch]:
     config = setup.config
     with _TASKS_LOCK:
         return _build_tasks(setup.env_cls, tuple(config.seeds), config.episodes_per_cycle, config.train_steps,
-                            config.num_test_tasks)
+                            config.num_test_tasks, config.test_protocol)

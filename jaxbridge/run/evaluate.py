@@ -134,7 +134,7 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0, 
     policy = load_policy(run_dir)
     config, env_cls = policy.config, policy.setup.env_cls
     if sized_specs is None:
-        batch = evaluation_batch(env_cls, config.seeds, config.num_test_tasks)
+        batch = evaluation_batch(env_cls, config.seeds, config.num_test_tasks, protocol=config.test_protocol)
     else:
         specs, owners = [], []
         for s in config.seeds:
