@@ -1,12 +1,20 @@
-"""`--preset`: every value a preset sets reaches the config the learner uses, and its test tasks."""
+"""`--preset`: every value a preset sets reaches the config the learner uses, and its test tasks; the
+authors' learner options do what they say."""
 import dataclasses
 
+import jax
+import jax.numpy as jnp
+import numpy as np
 import pytest
 
 from envs_jax import env_class
+from envs_jax.base import BridgeObs
+from jaxbridge.core.bridges import RandomBridge
 from jaxbridge.commands.train import make_config
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import AUTHORS, preset_values
+from jaxbridge.learn.dqn import learn
+from jaxbridge.learn.q_bridge import QNetwork
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.cli import UsageError
 
@@ -60,3 +68,62 @@ def test_flags_override_the_preset_and_bad_names_are_refused():
         make_config({"env": "doorknobs", "test_protocol": "authors"})  # Doorknobs' authors' tasks are ours
     with pytest.raises(ValueError, match="unknown preset"):
         preset_values("theirs", env_class("coffee"))
+
+
+# ---- the authors' learner options do what they say ------------------------------------------------
+
+def test_the_authors_preset_builds_their_network_exploration_and_target():
+    config, _ = make_config({"env": "light_switch_door", "preset": "authors", "num_seeds": 1})
+    setup = make_setup(config)
+    assert setup.dqn.net.activation == "relu" and setup.bridge(setup.test_env).explore_ground_operators
+    assert (config.target_init, config.reset_optimizer) == ("apart", True)
+
+
+@pytest.mark.parametrize("activation, hidden", [("relu", lambda h: np.maximum(h, 0.0)),
+                                                ("leaky_relu", lambda h: np.where(h >= 0, h, 0.01 * h))])
+def test_hidden_units_are_the_named_activation(activation, hidden):
+    x = np.asarray(jax.random.normal(jax.random.key(0), (64, 9)))
+    net = QNetwork((8, 8), 1, activation)
+    params = net.init(jax.random.key(1), x)
+    params = jax.tree.map(lambda p: p + 0.3 * jax.random.normal(jax.random.key(2), p.shape), params)  # output != 0
+    layers = [params["params"][name] for name in sorted(params["params"])]  # UniformDense_0, _1, _2
+    h = x
+    for layer in layers[:-1]:
+        h = hidden(h @ np.asarray(layer["kernel"]) + np.asarray(layer["bias"]))
+    expected = (h @ np.asarray(layers[-1]["kernel"]) + np.asarray(layers[-1]["bias"]))[:, 0]
+    np.testing.assert_allclose(net.apply(params, x), expected, rtol=1e-5, atol=1e-6)
+
+
+def test_the_target_starts_as_a_copy_or_apart():
+    def learner(target_init):
+        config = TrainConfig.for_env("light_switch_door", num_seeds=1, target_init=target_init)
+        return make_setup(config).init_learners()
+
+    copy, apart = learner("copy"), learner("apart")
+    assert all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(copy.params), jax.tree.leaves(apart.params)))
+    assert all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(copy.params), jax.tree.leaves(copy.target_params)))
+    hidden = lambda params: params["params"]["UniformDense_0"]["kernel"]
+    assert not np.allclose(hidden(apart.params), hidden(apart.target_params))
+
+
+@pytest.mark.parametrize("reset", [False, True])
+def test_the_optimizer_is_new_for_each_cycles_fit_only_when_asked(reset):
+    """Adam's step count after a cycle: carried on from the last cycle, or counted from 0 again."""
+    config = TrainConfig.for_env("light_switch_door", num_seeds=1, updates_per_cycle=3, reset_optimizer=reset)
+    setup = make_setup(config)
+    learner = jax.tree.map(lambda x: x[0], setup.init_learners())
+    clip, (adam, scale) = learner.opt_state
+    learner = learner.replace(opt_state=(clip, (adam._replace(count=jnp.int32(57)), scale)))
+    after, _, _ = jax.jit(lambda l: learn(setup.dqn, l, jnp.int32(0)))(learner)  # empty buffer: no update
+    assert int(after.opt_state[1][0].count) == (0 if reset else 57)
+
+
+@pytest.mark.parametrize("ground_operators, expected", [(False, [1 / 3, 1 / 3, 0, 0, 0, 1 / 3]),
+                                                        (True, [3 / 5, 1 / 5, 0, 0, 0, 1 / 5])])
+def test_random_draws_over_skills_or_over_ground_operators(ground_operators, expected):
+    """3 applicable MoveRobot groundings, 1 TurnOnLight, CallPlanner: per skill, or per ground operator."""
+    env = env_class("light_switch_door")()
+    obs = BridgeObs(features=jnp.zeros(env.num_features), num_ground=jnp.array([3, 1, 0, 0, 0, 1], jnp.int32))
+    bridge = RandomBridge(env, ground_operators)
+    skills = jax.vmap(lambda k: bridge(None, obs, k).skill)(jax.random.split(jax.random.key(0), 6000))
+    np.testing.assert_allclose(np.bincount(np.asarray(skills), minlength=6) / 6000, expected, atol=0.025)

@@ -21,14 +21,16 @@ Bridge = Callable[[object, BridgeObs, jax.Array], BridgeAction]
 class RandomBridge:
     """A uniformly random applicable skill, CallPlanner included once it is applicable, with a parameter
     from the skill's sampler; the meta-policy then grounds it uniformly among its applicable ground
-    operators (the authors drew over ground operators instead: docs/DESIGN.md)."""
+    operators. With `ground_operators` each skill is drawn as often as it has applicable ground
+    operators, so the action is uniform over ground operators (the authors' draw: docs/DESIGN.md)."""
 
     env: NoveltyEnv
+    ground_operators: bool = False
 
     def __call__(self, params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
         env = self.env
         k_skill, k_param = jax.random.split(key)
-        weights = (obs.num_ground > 0).astype(jnp.float32)
+        weights = (obs.num_ground if self.ground_operators else obs.num_ground > 0).astype(jnp.float32)
         skill = jax.random.categorical(k_skill, jnp.log(weights))  # log 0 = -inf: never chosen
         params_all = env.sample_params(k_param)
         param = jnp.where(skill < env.num_skills, params_all[jnp.minimum(skill, env.num_skills - 1)], 0.0)

@@ -6,9 +6,15 @@ import dataclasses
 from dataclasses import dataclass
 
 # 2: `approach` (version 1 configs were all "ours" and still load); 3: `split_task_state` (older runs
-# stored whole observations and load with it off); 4: `preset`, `test_protocol` (older runs were the
-# jaxbridge preset on the env's own test tasks, which their defaults say)
+# stored whole observations and load with it off); 4: `preset`, `test_protocol`, `activation`,
+# `target_init`, `reset_optimizer`, `explore_ground_operators` (older runs were the jaxbridge preset,
+# which their defaults are)
 CONFIG_VERSION = 4
+
+
+# The string options and what they may be.
+CHOICES = {"polyak_per": ("update", "decision"), "activation": ("leaky_relu", "relu"),
+           "target_init": ("copy", "apart")}
 
 
 @dataclass(frozen=True)
@@ -59,6 +65,18 @@ class TrainConfig:
     "decision" (the authors' code). See docs/RESULTS.md for the comparison."""
     hidden_sizes: tuple[int, ...] = (32, 32)
     """Q-network hidden layers (the paper: [32, 32])."""
+    activation: str = "leaky_relu"
+    """Hidden units: "leaky_relu" (slope 0.01, ours: keeps units alive under mostly-zero targets) or
+    "relu" (the authors')."""
+    target_init: str = "copy"
+    """The target network at the start: a "copy" of the online one (ours) or initialised "apart" from
+    it (the authors'), then tracking it by polyak steps."""
+    reset_optimizer: bool = False
+    """A new Adam state at the start of every cycle's updates (the authors'); ours keeps one across cycles."""
+    explore_ground_operators: bool = False
+    """Exploration (and the random bridge) draws a random applicable ground operator, so a skill with more
+    groundings is drawn more often (the authors'); ours draws a random applicable skill, then one of its
+    ground operators."""
     q_ensemble: int = 1
     """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     n_sample: int = 100
@@ -88,6 +106,11 @@ class TrainConfig:
     2027 values)."""
     checkpoint_every: int = 10
     """Save the learner state every this many cycles (and after the last one)."""
+
+    def __post_init__(self):
+        for field, allowed in CHOICES.items():
+            if getattr(self, field) not in allowed:
+                raise ValueError(f"{field} must be one of {', '.join(allowed)}, got {getattr(self, field)!r}")
 
     def to_dict(self) -> dict:
         return {**dataclasses.asdict(self), "hidden_sizes": list(self.hidden_sizes),

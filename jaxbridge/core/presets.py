@@ -6,10 +6,10 @@
   command line still override a preset's values.
 
 Departures the preset does not switch yet (docs/DESIGN.md, "Departures"): the authors' per-cycle
-min-max input/target normalisation, their fitting schedule (a new Adam each cycle, up to 100,000
-iterations stopped after 5,000 without a better minibatch loss, the best weights restored), a target
-network initialised apart from the online one, exploration drawn over ground operators rather than
-skills, plain ReLU hidden units, and Coffee's repeated-state flag shared between two skills.
+min-max input/target normalisation, their fitting schedule (up to 100,000 iterations stopped after
+5,000 without a better minibatch loss, the best weights restored; the preset keeps our fixed updates
+per cycle), PyTorch's default initialisation of the output layer, and Coffee's repeated-state flag
+shared between two skills.
 """
 from __future__ import annotations
 
@@ -25,6 +25,10 @@ AUTHORS = {
     "call_planner_bonus": 0.5,  # +0.5 when CallPlanner's transition reaches the goal
     "clip_bootstrap": False,  # no clipping of the bootstrapped value
     "q_ensemble": 1,  # one network
+    "activation": "relu",  # plain ReLU hidden units
+    "target_init": "apart",  # the target initialised apart from the online network
+    "reset_optimizer": True,  # a new Adam every cycle
+    "explore_ground_operators": True,  # epsilon draws uniformly over the applicable ground operators
 }
 
 

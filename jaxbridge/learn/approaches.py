@@ -27,11 +27,15 @@ class Approach:
     def learns(self) -> bool:
         return self.bridge == "q"
 
-    def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int) -> Bridge:
-        """The approach's bridge (equal arguments give equal bridges: one compiled rollout serves them)."""
+    def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int,
+                    explore_ground_operators: bool = False) -> Bridge:
+        """The approach's bridge (equal arguments give equal bridges: one compiled rollout serves them);
+        `explore_ground_operators`: random draws over ground operators (RandomBridge)."""
         if self.bridge == "q":
-            return QBridge(env, net, n_sample)
-        return RandomBridge(env) if self.bridge == "random" else PurePlanningBridge(env)
+            return QBridge(env, net, n_sample, explore_ground_operators)
+        if self.bridge == "random":
+            return RandomBridge(env, explore_ground_operators)
+        return PurePlanningBridge(env)
 
     def observation_size(self, env: NoveltyEnv) -> int:
         """The width of what its bridge sees on `env`."""

@@ -63,7 +63,7 @@ class DQN:
 
 
 def q_network(config: TrainConfig) -> QNetwork:
-    return QNetwork(config.hidden_sizes, config.q_ensemble)
+    return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation)
 
 
 def make_optimizer(config: TrainConfig) -> optax.GradientTransformation:
@@ -101,11 +101,15 @@ def empty_transition(dqn: DQN) -> Transition:
 
 
 def init_learner(dqn: DQN, key: jax.Array) -> Learner:
-    """A fresh network (the target starts as its copy), optimiser and empty replay buffer."""
+    """A fresh network, its target (a copy, or with `target_init` "apart" another draw), optimiser and
+    empty replay buffer."""
     k_init, k_run = jax.random.split(key)
     env, num_features = dqn.env, dqn.num_features
-    params = dqn.net.init(k_init, jnp.zeros((1, input_size(env, num_features)), jnp.float32))
-    return Learner(params=params, target_params=jax.tree.map(jnp.copy, params),
+    sample = jnp.zeros((1, input_size(env, num_features)), jnp.float32)
+    params = dqn.net.init(k_init, sample)
+    target = (jax.tree.map(jnp.copy, params) if dqn.config.target_init == "copy"
+              else dqn.net.init(jax.random.fold_in(k_init, 1), sample))
+    return Learner(params=params, target_params=target,
                    opt_state=dqn.optimizer.init(params),
                    buffer=init_buffer(empty_transition(dqn), dqn.config.buffer_capacity),
                    key=k_run,
@@ -210,6 +214,8 @@ def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None) -
     key, k_relabel = jax.random.split(learner.key)
     targets = relabel(dqn, learner, k_relabel, task)
     learner = learner.replace(key=key)
+    if config.reset_optimizer:  # the authors' new Adam for every cycle's fit
+        learner = learner.replace(opt_state=dqn.optimizer.init(learner.params))
 
     if config.updates_per_cycle == 0:
         return learner, jnp.float32(0.0), jnp.float32(0.0)

@@ -100,20 +100,22 @@ class UniformDense(nn.Module):
 
 
 LEAKY_SLOPE = 0.01
+ACTIVATIONS = {"leaky_relu": lambda x: nn.leaky_relu(x, LEAKY_SLOPE), "relu": nn.relu}
 
 
-def _mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int]) -> jax.Array:
+def _mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int], activation: str) -> jax.Array:
     for size in hidden_sizes:
-        x = nn.leaky_relu(UniformDense(size)(x), LEAKY_SLOPE)
+        x = ACTIVATIONS[activation](UniformDense(size)(x))
     return UniformDense(1, scale=0.0)(x)[..., 0]
 
 
 class _Member(nn.Module):
     hidden_sizes: Sequence[int]
+    activation: str
 
     @nn.compact
     def __call__(self, carry: None, x: jax.Array | SplitInput) -> tuple[None, jax.Array]:
-        return carry, _mlp(x, self.hidden_sizes)
+        return carry, _mlp(x, self.hidden_sizes, self.activation)
 
 
 class QNetwork(nn.Module):
@@ -127,20 +129,21 @@ class QNetwork(nn.Module):
 
     hidden_sizes: Sequence[int] = (32, 32)
     ensemble: int = 1
+    activation: str = "leaky_relu"  # of the hidden units: ACTIVATIONS
 
     @nn.compact
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
         """Q of x[..., input] (or of a SplitInput): [...], or every member's, [ensemble, ...], with
         `members`."""
         if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
-            q = _mlp(x, self.hidden_sizes)[None]
+            q = _mlp(x, self.hidden_sizes, self.activation)[None]
         else:
             # Members one after another (a scan over their stacked parameters), not vmapped: a member
             # axis inside the per-seed program made XLA compile the gradient differently with the
             # number of devices (docs/RELIABILITY.md); each member alone compiles as the plain network.
             members_scan = nn.scan(_Member, variable_axes={"params": 0}, split_rngs={"params": True},
                                    in_axes=nn.broadcast, length=self.ensemble)
-            _, q = members_scan(self.hidden_sizes)(None, x)
+            _, q = members_scan(self.hidden_sizes, self.activation)(None, x)
         return q if members else jnp.min(q, axis=0)
 
 
@@ -233,10 +236,12 @@ class QBridge:
     env: NoveltyEnv
     net: QNetwork
     n_sample: int
+    explore_ground_operators: bool = False  # epsilon's draw: over ground operators, not skills (RandomBridge)
 
     def __call__(self, params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
         k_explore, k_random, k_greedy = jax.random.split(key, 3)
         skills = candidate_skills(self.env, self.n_sample)
         greedy, _ = best_candidate(self.env, self.net, params.q, obs.features, obs.num_ground, skills, k_greedy)
         explore = jax.random.uniform(k_explore) < params.epsilon
-        return tree_where(explore, RandomBridge(self.env)(None, obs, k_random), greedy)
+        random = RandomBridge(self.env, self.explore_ground_operators)(None, obs, k_random)
+        return tree_where(explore, random, greedy)
