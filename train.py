@@ -112,6 +112,11 @@ def parse_args(argv):
     p.add_argument("--debug", action="store_true",
                    help="show the tracebacks and orbax's own messages behind an error (default: one line)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
+    p.add_argument("--tensorboard", action="store_true",
+                   help="also write TensorBoard event files (tensorboardX) into each approach's run directory, "
+                        "events/, as cycles complete: per cycle the mean, 95%% CI and IQM over seeds of the test and "
+                        "training solve rates, the loss, epsilon, buffer size, and the config as text "
+                        "(tensorboard --logdir RUN); metrics.csv stays the source of truth (default: off)")
     p.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return p.parse_args(argv)
 

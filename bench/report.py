@@ -40,6 +40,8 @@ AUTHORS = {
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("experiment", type=Path, help="an experiment directory written by train.py")
+    parser.add_argument("--figure", type=Path, default=None,
+                        help="where to copy its curves.png (default: docs/figures/<env>_approaches.png)")
     args = parser.parse_args()
     if not is_experiment_dir(args.experiment):
         sys.exit(f"error: {args.experiment} is not an experiment directory (no experiment.json)")
@@ -61,9 +63,8 @@ def main() -> None:
         if row["approach"] in authors:
             *values, smooth, note = authors[row["approach"]]
             print(f"| {row['label']} (authors, {note}) | | " + " | ".join(values) + f" | {smooth} | |")
-    figures = Path("docs/figures")
-    figures.mkdir(parents=True, exist_ok=True)
-    target = figures / f"{config.env}_approaches.png"
+    target = args.figure or Path("docs/figures") / f"{config.env}_approaches.png"
+    target.parent.mkdir(parents=True, exist_ok=True)
     shutil.copy(args.experiment / "curves.png", target)
     print(f"\nfigure copied to {target}")
 

@@ -33,3 +33,22 @@ def wait_for(path: Path, proc: subprocess.Popen, seconds: float = 300) -> None:
     while not path.exists():
         assert proc.poll() is None and time.time() < deadline, f"{path} never appeared"
         time.sleep(0.05)
+
+
+def read_scalars(directory: Path) -> dict[str, list[tuple[int, float]]]:
+    """{tag: [(step, value)]} of the scalars in the TensorBoard event files of `directory`, read with
+    the record framing of the format (length, its CRC, the Event proto, its CRC) and tensorboardX's proto."""
+    import struct
+    from tensorboardX.proto import event_pb2
+
+    scalars: dict[str, list[tuple[int, float]]] = {}
+    for path in sorted(directory.glob("events.out.tfevents.*")):
+        data, at = path.read_bytes(), 0
+        while at < len(data):
+            (length,) = struct.unpack("<Q", data[at:at + 8])
+            event = event_pb2.Event.FromString(data[at + 12:at + 12 + length])
+            at += 12 + length + 4
+            for value in event.summary.value:
+                if value.HasField("simple_value"):
+                    scalars.setdefault(value.tag, []).append((event.step, value.simple_value))
+    return scalars

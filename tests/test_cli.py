@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from run_helpers import read_scalars
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -19,7 +21,7 @@ def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
     proc = run("train.py", "--num-seeds", "2", "--cycles", "3", "--updates-per-cycle", "10",
                "--checkpoint-every", "2", "--out", str(out), "--name", "tiny",
-               "--approaches", "ours,pure_planning", "--preset", "authors")
+               "--approaches", "ours,pure_planning", "--preset", "authors", "--tensorboard")
     assert proc.returncode == 0, proc.stderr
     return out / "tiny", proc
 
@@ -41,6 +43,21 @@ def test_train_writes_the_experiment_directory(short_run):
     assert table.count("| pure planning | 2 |  |  |  |  | 0.00 | 0.00 |") == 2  # no report cycle in 3 cycles
     assert (experiment_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "pure_planning" in proc.stdout and "ours" in proc.stdout
+
+
+def test_tensorboard_events_hold_each_cycles_statistics_and_the_config(short_run):
+    """--tensorboard: per approach, an event file whose scalars are metrics.csv's per-cycle means."""
+    run_dir = short_run[0] / "ours"
+    rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
+    scalars = read_scalars(run_dir / "events")
+    for field, tag in (("test_solve_rate", "test/solve_rate/mean"), ("epsilon", "learn/epsilon")):
+        means = [sum(float(r[field]) for r in rows if r["cycle"] == str(c)) / 2 for c in (1, 2, 3)]
+        assert [step for step, _ in scalars[tag]] == [1, 2, 3]
+        assert [v for _, v in scalars[tag]] == pytest.approx(means, abs=1e-6)
+    low, high = scalars["train/success_rate/mean_low"], scalars["train/success_rate/mean_high"]
+    assert all(a[1] <= b[1] for a, b in zip(low, high))
+    assert any(p.name.startswith("events.out.tfevents") for p in (short_run[0] / "pure_planning" / "events").iterdir())
+    assert b"config" in next((run_dir / "events").glob("events.out.tfevents.*")).read_bytes()
 
 
 def test_progress_into_a_log_is_plain_lines(short_run):

@@ -65,7 +65,8 @@ def train_task(seed: int) -> LightSwitchDoorTask:
 
 
 TEST_PROTOCOLS = {"jaxbridge": "horizon max(30, h + 5), the paper's",
-                  "authors": f"horizon {AUTHORS_HORIZON}, the authors' code (seed 2's 20 cells and 3 doors need 32 steps)"}
+                  "authors": f"horizon {AUTHORS_HORIZON}, the authors' code (a task whose shortest solution is longer "
+                             f"is unsolvable, e.g. seed 2's 20 cells and 3 doors: 32 steps)"}
 
 
 def test_tasks(seed: int, num_tasks: int = 10, protocol: str = "jaxbridge") -> list[LightSwitchDoorTask]:

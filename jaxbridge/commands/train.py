@@ -58,7 +58,7 @@ def default_approaches(env_cls) -> list[str]:
 
 def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: str | None, overwrite: bool,
                    progress: bool, workers: int | None, devices: list, max_memory: float | None = None,
-                   interrupts=None) -> tuple[Path, Callable[[], dict]]:
+                   interrupts=None, tensorboard: bool = False) -> tuple[Path, Callable[[], dict]]:
     """(experiment directory, the training to run) of a new experiment; the directory is locked. A run
     whose memory estimate exceeds `max_memory` GiB (default: what is available) is refused first."""
     from jaxbridge.learn.devices import default_workers
@@ -87,7 +87,8 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
         raise UsageError(f"cannot write experiment directory {out / (name or env_cls.name)}: {err.strerror}") from None
     from jaxbridge.run.experiments import train_approaches  # after the refusals: it loads orbax (~0.2 s)
     return out_dir, _releasing(lock, lambda: train_approaches(config, approaches, out_dir, progress, workers=workers,
-                                                              devices=devices, replaced=replaced, **_watch(interrupts)))
+                                                              devices=devices, replaced=replaced,
+                                                              **_watch(interrupts, tensorboard)))
 
 
 def check_resume_flags(flags: dict) -> None:
@@ -98,7 +99,8 @@ def check_resume_flags(flags: dict) -> None:
         raise UsageError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")
 
 
-def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list, interrupts=None) -> Callable[[], dict]:
+def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list, interrupts=None,
+            tensorboard: bool = False) -> Callable[[], dict]:
     """The training that continues the experiment (or one approach's run) in `run_dir`, locked."""
     from jaxbridge.learn.setup import make_setup
     from jaxbridge.run import rundir
@@ -112,20 +114,22 @@ def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list, i
             load_env(config.env)
             check_resumable(run_dir, approaches)
             run = lambda: train_approaches(config, approaches, run_dir, progress, resume=True, workers=workers,
-                                           devices=devices, **_watch(interrupts))
+                                           devices=devices, **_watch(interrupts, tensorboard))
         else:
             config = load_config(run_dir)
             setup = make_setup(config, load_env(config.env))
             run = lambda: {config.approach: train(setup, run_dir, progress, resume=True, devices=devices,
-                                                  **_watch(interrupts))}
+                                                  **_watch(interrupts, tensorboard))}
         return _releasing(rundir.RunLock(run_dir).acquire(), run)
     except (ValueError, CheckpointError, rundir.RunDirError) as err:
         raise UsageError(str(err)) from None
 
 
-def _watch(interrupts) -> dict:
-    """The stop/trained events of commands.interrupts.Interrupts, as keyword arguments of the runs."""
-    return {} if interrupts is None else {"stop": interrupts.stop, "trained": interrupts.trained}
+def _watch(interrupts, tensorboard: bool = False) -> dict:
+    """The stop/trained events of commands.interrupts.Interrupts and --tensorboard, as keyword arguments
+    of the runs."""
+    events = {"tensorboard": True} if tensorboard else {}
+    return events if interrupts is None else {"stop": interrupts.stop, "trained": interrupts.trained, **events}
 
 
 def _releasing(lock, run: Callable[[], dict]) -> Callable[[], dict]:
@@ -164,10 +168,10 @@ def main(args, devices: list) -> int:
     interrupts = Interrupts(on_exit=release_held)
     if args.resume is not None:
         check_resume_flags(vars(args))
-        out_dir, run = args.resume, resumed(args.resume, progress, args.workers, devices, interrupts)
+        out_dir, run = args.resume, resumed(args.resume, progress, args.workers, devices, interrupts, args.tensorboard)
     else:
         out_dir, run = new_experiment(vars(args), args.approaches, args.out, args.name, args.overwrite, progress,
-                                      args.workers, devices, args.max_memory, interrupts)
+                                      args.workers, devices, args.max_memory, interrupts, args.tensorboard)
     from jaxbridge.run import checkpoint
     from jaxbridge.run.experiments import is_experiment_dir
     from jaxbridge.run.runner import Interrupted, NumericalFault

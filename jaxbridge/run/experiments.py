@@ -58,14 +58,14 @@ def check_resumable(experiment_dir: Path, approaches: list[str]) -> None:
 def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
                      resume: bool = False, workers: int | None = None, devices: list | None = None,
                      replaced: Path | None = None, stop: threading.Event | None = None,
-                     trained: threading.Event | None = None) -> dict[str, dict]:
+                     trained: threading.Event | None = None, tensorboard: bool = False) -> dict[str, dict]:
     """Train every approach (run directory `experiment_dir/<approach>`), `workers` at a time, then write
     the comparison files (figure, results.md, results.csv), also after a fault or Ctrl-C for the
     approaches that have files. With `resume`, finished approaches are kept, started ones continue
     from their checkpoint and the others start. `replaced`: the run this one replaces, moved aside, deleted
     once this one's experiment file is written. `stop` (set by another thread) stops every approach after
-    its current cycle, checkpointed; `trained` is set after any cycle completes. Returns each approach's
-    summary, in list order."""
+    its current cycle, checkpointed; `trained` is set after any cycle completes; `tensorboard`: event files
+    per approach (run/tensorboard.py). Returns each approach's summary, in list order."""
     if resume:
         check_resumable(experiment_dir, approaches)
     else:
@@ -91,7 +91,7 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         share = device_shares.get()
         try:
             return train(make_setup(dataclasses.replace(config, approach=name), env_cls), run_dir, resume=started,
-                         bar=bar, stop=stop, devices=share, trained=trained)
+                         bar=bar, stop=stop, devices=share, trained=trained, tensorboard=tensorboard)
         finally:
             device_shares.put(share)
 

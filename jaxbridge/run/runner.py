@@ -17,6 +17,7 @@ from jaxbridge.learn.devices import SeedMesh, describe
 from jaxbridge.learn.online import Cycle, CycleMetrics
 from jaxbridge.learn.setup import Setup, make_setup
 from jaxbridge.run import artifacts, checkpoint
+from jaxbridge.run.tensorboard import CycleEvents
 from jaxbridge.utils.files import WriteError, write_atomic
 from jaxbridge.utils.progress import cycle_progress
 
@@ -89,13 +90,14 @@ def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int)
 def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = False,
           fault_injection: Callable | None = None, bar=None,
           stop: threading.Event | None = None, devices: list | None = None,
-          trained: threading.Event | None = None) -> dict:
+          trained: threading.Event | None = None, tensorboard: bool = False) -> dict:
     """Run the cycles of `setup.config` (continuing the latest checkpoint with `resume`), writing the run
     files and checkpoints into `run_dir`. `fault_injection(cycle, learners) -> learners` lets tests
     corrupt the state before a cycle (seed i is slot i of the leading axis). `bar`: a progress bar
     shared with other runs (else its own). `stop`: when set (by another thread), checkpoint the last
     completed cycle and raise Interrupted; `trained` is set after each completed cycle. `devices`: the seed axis is sharded over them (default: the
-    first local device); the numbers do not depend on them, and a run may resume on others."""
+    first local device); the numbers do not depend on them, and a run may resume on others. `tensorboard`:
+    also log each cycle to TensorBoard event files (run/tensorboard.py)."""
     start, config = time.perf_counter(), setup.config
     if resume:
         check_checkpoint_belongs(config, run_dir)
@@ -122,6 +124,7 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
     # (learners, history) after the last completed cycle, replaced in one assignment so that Ctrl-C at
     # any point finds a consistent pair to checkpoint.
     done, unwritable = (learners, history), False
+    events = CycleEvents(run_dir, config.to_dict()) if tensorboard else None
     own_bar = bar is None
     if own_bar:
         bar = cycle_progress(config.cycles, f"{config.env} x{config.num_seeds} seeds", progress, len(history))
@@ -140,6 +143,8 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
             done = (updated, [*done[1], metrics])
             if trained is not None:
                 trained.set()
+            if events is not None:
+                events.cycle(c, metrics)
             shown = {} if own_bar else {"last": f"{config.approach} {c}"}
             bar.set_postfix(**shown, test=f"{metrics.test_solve_rate.mean():.2f}",
                             train=f"{metrics.train_success_rate.mean():.2f}", eps=f"{metrics.epsilon.mean():.2f}")
@@ -156,6 +161,8 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
     finally:
         if own_bar:
             bar.close()
+        if events is not None:
+            events.close()
         info = artifacts.summary(done[1], config.seeds, elapsed(), describe(seeds.devices)) if done[1] else None
         if info and not unwritable:  # the files always describe the cycles completed so far
             artifacts.write_run_files(run_dir, config.to_dict(), done[1], info, label=setup.approach.label)
