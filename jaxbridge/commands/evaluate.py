@@ -215,8 +215,8 @@ def sweep(args) -> int:
     print(note, end="")
     try:
         write_atomic(out / "sweep_novelties.png", plot_sweep(result, title))
-        write_atomic(out / "sweep_novelties.md", f"# {title}\n\nTest solve rate, mean [min, max] over seeds.\n\n"
-                     + table + note)
+        write_atomic(out / "sweep_novelties.md", f"# {title}\n\nTest solve rate, mean [95% bootstrap CI] over "
+                     "seeds (each seed's: the .csv).\n\n" + table + note)
         write_atomic(out / "sweep_novelties.csv", sweep_csv(result))
     except OSError as err:
         raise UsageError(f"cannot write to {out}: {err.strerror or err}") from None

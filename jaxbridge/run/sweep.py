@@ -17,6 +17,7 @@ import numpy as np
 from envs_jax.base import NoveltyEnv
 from jaxbridge.run.evaluate import TrainedPolicy
 from jaxbridge.core.tasks import TaskBatch, make_batch
+from jaxbridge.utils import stats
 
 
 @dataclass
@@ -87,12 +88,12 @@ def list_of(specs: list, mask: np.ndarray) -> list:
 def _cell(values: np.ndarray) -> str:
     if np.isnan(values).all():
         return "n/a"
-    mean, low, high = values.mean(), values.min(), values.max()
-    return f"{mean:.2f}" if low == high else f"{mean:.2f} [{low:.2f}, {high:.2f}]"
+    described = stats.describe(values)
+    return stats.ci_text(float(described["mean"]), (described["mean_low"], described["mean_high"]))
 
 
 def sweep_markdown(result: SweepResult) -> str:
-    """Solve rate per count (rows) and line (columns): mean [min, max] over seeds."""
+    """Solve rate per count (rows) and line (columns): mean [95% bootstrap CI] over seeds."""
     labels = list(result.solve_rate)
     lines = [f"| {result.counted} | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
     for j, k in enumerate(result.counts):
@@ -114,8 +115,8 @@ def sweep_csv(result: SweepResult) -> str:
 
 
 def plot_sweep(result: SweepResult, title: str) -> bytes:
-    """PNG: solve rate vs count, one line per label (mean over seeds) with a band from the lowest to the
-    highest seed."""
+    """PNG: solve rate vs count, one line per label (mean over seeds) with its 95% bootstrap interval as a
+    band and the lowest to the highest seed as a lighter one."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(10, 4.2))
@@ -126,7 +127,9 @@ def plot_sweep(result: SweepResult, title: str) -> bytes:
             ax.plot([], [], " ", label=f"{label}: n/a (its full-state input is too small)")
             continue
         line, = ax.plot(x, rate.mean(0), marker="o", markersize=3, label=f"{label} ({rate.shape[0]} seeds)")
-        ax.fill_between(x, rate.min(0), rate.max(0), color=line.get_color(), alpha=0.2)
+        low, high = stats.bootstrap_ci(rate)  # NaN at counts the approach cannot see: nothing drawn there
+        ax.fill_between(x, low, high, color=line.get_color(), alpha=0.3, lw=0)
+        ax.fill_between(x, rate.min(0), rate.max(0), color=line.get_color(), alpha=0.08, lw=0)
     ax.set_xlabel(f"number of {result.counted} ({result.setting})")
     ax.set_ylabel(f"test solve rate ({result.tasks_per_count} tasks per point and seed)")
     ax.set_xticks(x)
