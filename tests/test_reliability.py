@@ -122,6 +122,27 @@ def test_checkpoints_saved_at_once_from_two_threads_all_complete(tmp_path):
     assert checkpoint.sealed_steps(tmp_path / "a") == checkpoint.sealed_steps(tmp_path / "b") == [9, 10]
 
 
+def test_a_step_orbax_will_delete_is_unsealed_before_the_save_that_deletes_it(tmp_path, monkeypatch):
+    """orbax keeps the latest checkpoints and deletes older ones while it saves; a third Ctrl-C can stop
+    the process mid-deletion (seen in CI: a half-deleted step 1 still had its manifest and read as
+    corrupted). So when orbax starts a save, what it will drop is no longer sealed."""
+    import orbax.checkpoint as ocp
+
+    state, sealed_at_save = {"w": jnp.ones((4, 3))}, []
+    for step in (1, 2):
+        checkpoint.save(tmp_path, step, state, {"cycle": step})
+    original = ocp.CheckpointManager.save
+
+    def watched(self, step, *args, **kwargs):
+        sealed_at_save.append(checkpoint.sealed_steps(tmp_path))
+        return original(self, step, *args, **kwargs)
+
+    monkeypatch.setattr(ocp.CheckpointManager, "save", watched)
+    checkpoint.save(tmp_path, 3, state, {"cycle": 3})
+    assert sealed_at_save == [[2]] and checkpoint.sealed_steps(tmp_path) == [2, 3]
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.isdigit()) == ["2", "3"]
+
+
 def test_a_checkpoint_of_another_config_version_is_refused(uninterrupted, tmp_path):
     import shutil
     run_dir = tmp_path / "old"

@@ -104,6 +104,11 @@ def _save(directory: Path, step: int, state: Any, record: dict) -> None:
     unsealed = directory / str(step)
     if unsealed.exists() and not _manifest_path(directory, step).is_file():
         shutil.rmtree(unsealed)  # a save of this step that never completed: orbax would keep its files
+    # Unseal first what this save makes orbax delete (it keeps the KEEP latest steps): a process stopped
+    # while orbax deletes a step (a third Ctrl-C) must not leave a half-deleted step with its manifest.
+    sealed = sealed_steps(directory)
+    for old in sealed[:max(0, len(sealed) - (KEEP - 1))]:
+        _manifest_path(directory, old).unlink()
     with _manager(directory) as mgr:
         saved = mgr.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state),
                                                        record=ocp.args.JsonSave(record)))
