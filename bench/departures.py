@@ -24,8 +24,9 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import AUTHORS, preset_values
 from jaxbridge.learn.devices import select_devices
 from jaxbridge.run.artifacts import at_cycle, curve_statistics
-from jaxbridge.run.comparison import ci_cell, read_metrics
+from jaxbridge.run.comparison import read_metrics
 from jaxbridge.run.experiments import train_approaches
+from jaxbridge.utils import stats
 
 FIRST_EVALUATION_SEED = 100
 CYCLES = (25, 100)  # the table's columns (a shorter run reports its last cycle)
@@ -112,7 +113,7 @@ def main() -> None:
         words = lambda values: ", ".join(f"{k} {v}" for k, v in values.items())
         change = (f"{words(theirs)} (ours: {words(mine)})" if name.startswith("default-") else
                   f"{words(mine)} (authors: {words(theirs)})" if name.startswith("authors-") else "reference")
-        print(f"| {name} | {change} | " + " | ".join(f"{ci_cell(cells[c])} | {ci_cell(cells[c], 'iqm')}"
+        print(f"| {name} | {change} | " + " | ".join(f"{stats.cell_text(cells[c])} | {stats.cell_text(cells[c], 'iqm')}"
                                                   for c in CYCLES) + " |")
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.run.artifacts import REPORT_CYCLES, report_cells
-from jaxbridge.run.comparison import ci_cell, write_comparison
+from jaxbridge.run.comparison import write_comparison
 from jaxbridge.run.experiments import is_experiment_dir, load_experiment
 from jaxbridge.utils import stats
 
@@ -58,8 +58,8 @@ def main() -> None:
         cells = report_cells(row["curves"], row["cycles"])
         at = cells["test_solve_rate_at"]
         print(f"| **{row['label']}** (jaxbridge) | {stats.seed_range(row['seeds'])} | "
-              + " | ".join(ci_cell(at[str(c)]) if str(c) in at else "-" for c in REPORT_CYCLES)
-              + f" | **{ci_cell(cells['smooth_reward_final'])}** | {ci_cell(cells['train_smooth_reward_final'])} |")
+              + " | ".join(stats.cell_text(at[str(c)]) if str(c) in at else "-" for c in REPORT_CYCLES)
+              + f" | **{stats.cell_text(cells['smooth_reward_final'])}** | {stats.cell_text(cells['train_smooth_reward_final'])} |")
         if row["approach"] in authors:
             *values, smooth, note = authors[row["approach"]]
             print(f"| {row['label']} (authors, {note}) | | " + " | ".join(values) + f" | {smooth} | |")

@@ -12,7 +12,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import preset_values
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.utils.cli import UsageError
-from jaxbridge.utils.stats import ci_text
+from jaxbridge.utils.stats import cell_text
 
 # train.py flags that set the run's config (flag name = config field); --resume takes the saved config.
 CONFIG_FLAGS = ("env", "preset", "test_protocol", "num_seeds", "first_seed", "cycles", "episodes_per_cycle",
@@ -144,14 +144,11 @@ def _releasing(lock, run: Callable[[], dict]) -> Callable[[], dict]:
 
 def report(name: str, info: dict) -> str:
     """One approach's summary line: means over seeds with their 95% intervals."""
-    def mean(cell: dict) -> str:
-        return ci_text(cell["mean"], cell["mean_ci"])
-
     at = info["test_solve_rate_at"]
     last = max((int(c) for c in at), default=None)
     return (f"{name:>20}: mean test solve rate at the last cycle {info['per_cycle']['test_solve_rate']['mean'][-1]:.2f}; "
-            f"smooth reward at cycle {info['cycles']}: {mean(info['smooth_reward_final'])}"
-            + (f"; at cycle {last}: {mean(at[str(last)])}" if last else "")
+            f"smooth reward at cycle {info['cycles']}: {cell_text(info['smooth_reward_final'])}"
+            + (f"; at cycle {last}: {cell_text(at[str(last)])}" if last else "")
             + f" (95% CIs over seeds {info['seed_range']}; {info['elapsed_s']:.0f} s)")
 
 

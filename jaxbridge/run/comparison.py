@@ -58,11 +58,6 @@ def results_csv(rows: list[dict]) -> str:
     return out.getvalue()
 
 
-def ci_cell(cell: dict, statistic: str = "mean") -> str:
-    """A table cell (artifacts.at_cycle) as "0.85 [0.70, 0.95]": the statistic and its 95% interval."""
-    return stats.ci_text(cell[statistic], cell[f"{statistic}_ci"])
-
-
 def results_markdown(env: str, rows: list[dict]) -> str:
     last = max(r["cycles"] for r in rows)
     seeds = sorted({s for r in rows for s in r["seeds"]})
@@ -74,11 +69,11 @@ def results_markdown(env: str, rows: list[dict]) -> str:
                   "|---|---|" + "---|" * (len(REPORT_CYCLES) + 2)]
         for r in rows:
             cells = report_cells(r["curves"], r["cycles"])
-            at = [ci_cell(cells["test_solve_rate_at"][str(c)], statistic) if c <= r["cycles"] else ""
+            at = [stats.cell_text(cells["test_solve_rate_at"][str(c)], statistic) if c <= r["cycles"] else ""
                   for c in REPORT_CYCLES]
             lines.append(f"| {r['label']} | {len(r['seeds'])} | " + " | ".join(at) + f" | "
-                         f"{ci_cell(cells['smooth_reward_final'], statistic)} | "
-                         f"{ci_cell(cells['train_smooth_reward_final'], statistic)} |")
+                         f"{stats.cell_text(cells['smooth_reward_final'], statistic)} | "
+                         f"{stats.cell_text(cells['train_smooth_reward_final'], statistic)} |")
         lines.append("")
     lines += [f"Statistics {STATISTICS_NOTE}; every cycle's values are in results.csv. Smooth reward at cycle c: "
               "the sum of the solve rates of cycles c-25 .. c-1, divided by 25 (reference/results.md)."]

@@ -64,6 +64,11 @@ def ci_text(value: float, interval) -> str:
     return f"{value:.2f}" if low == high else f"{value:.2f} [{low:.2f}, {high:.2f}]"
 
 
+def cell_text(cell: dict, statistic: str = "mean") -> str:
+    """A table cell ({statistic: value, f"{statistic}_ci": [low, high], ...}) as ci_text."""
+    return ci_text(cell[statistic], cell[f"{statistic}_ci"])
+
+
 def seed_range(seeds: list[int]) -> str:
     """The seeds in words: "100-131", "0-3, 7"."""
     seeds = sorted(seeds)
