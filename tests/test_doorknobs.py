@@ -139,6 +139,21 @@ def test_door_opens_within_strict_tolerance_of_its_target_and_stays_open(rot, op
         assert bool(again.door_open[BOTTOM_DOOR]) and float(again.knob_rot[BOTTOM_DOOR]) == pytest.approx(rot)
 
 
+def test_a_knob_next_to_its_bounds_opens_as_the_authors_float64_test():
+    """The authors test |rot - 0.75| < 0.1 in float64: float32(0.65) = 0.64999998 stays shut, the next
+    float32 up opens; float32(0.85) = 0.85000002 stays shut, the one below opens."""
+    for bound in (0.65, 0.85):
+        rot = np.float32(bound)
+        for _ in range(3):
+            rot = np.nextafter(rot, np.float32(0))
+        for _ in range(7):
+            authors = abs(np.float64(rot) - maps.KNOB_TARGET) < maps.OPEN_TOLERANCE
+            s = act(fresh(robot=(1.505, 0.944)), drot=rot)
+            assert float(s.knob_rot[BOTTOM_DOOR]) == rot and bool(s.door_open[BOTTOM_DOOR]) == authors
+            rot = np.nextafter(rot, np.float32(1))
+    assert not bool(act(fresh(robot=(1.505, 0.944)), drot=np.float32(0.65)).door_open[BOTTOM_DOOR])
+
+
 def test_move_through_door_is_blocked_while_closed_and_crosses_once_open():
     def through(state, steps=6):
         for _ in range(steps):

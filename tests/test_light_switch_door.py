@@ -58,11 +58,39 @@ def test_keys_accumulate_and_clip_only_in_the_door_cell():
     assert float(act(fresh(x=5.5), dmove=0.2).move_key[1]) == pytest.approx(0.2)  # the second door
 
 
+def authors_door_open(move_key, turn_key) -> bool:
+    """The authors' test: float64 keys against float64 target +- 0.1, bounds included."""
+    move, turn = np.float64(move_key), np.float64(turn_key)
+    return bool(lsd.MOVE_TARGET - 0.1 <= move <= lsd.MOVE_TARGET + 0.1
+                and lsd.TURN_TARGET - 0.1 <= turn <= lsd.TURN_TARGET + 0.1)
+
+
 @pytest.mark.parametrize("move,turn,is_open", [
-    (0.4, 0.65, True), (0.6, 0.85, True), (0.5, 0.75, True),  # inclusive bounds
-    (0.39, 0.75, False), (0.61, 0.75, False), (0.5, 0.64, False), (0.5, 0.86, False), (0.0, 0.0, False)])
-def test_door_opens_within_inclusive_tolerance(move, turn, is_open):
-    assert bool(ENV.door_open(fresh(move=(move, 0), turn=(turn, 0)))[0]) == is_open
+    (0.5, 0.75, True), (0.4, 0.75, True), (0.5, 0.84, True), (0.0, 0.0, False), (0.39, 0.75, False),
+    (0.6, 0.75, False),  # float32(0.6) = 0.60000002 > 0.6
+    (0.5, 0.85, False),  # float32(0.85) = 0.85000002 > 0.85
+    (0.5, 0.65, False)])  # float32(0.65) = 0.64999998 < 0.65
+def test_door_opens_as_the_authors_float64_test_at_the_bounds(move, turn, is_open):
+    move32, turn32 = np.float32(move), np.float32(turn)
+    assert authors_door_open(move32, turn32) == is_open  # the cases above are the authors' verdicts
+    assert bool(ENV.door_open(fresh(move=(move32, 0), turn=(turn32, 0)))[0]) == is_open
+
+
+def test_every_float32_key_next_to_a_bound_gets_the_authors_verdict():
+    for bound in (0.4, 0.6):
+        for key in bounds_neighbourhood(bound):
+            assert bool(ENV.door_open(fresh(move=(key, 0), turn=(0.75, 0)))[0]) == authors_door_open(key, 0.75)
+    for bound in (0.65, 0.85):
+        for key in bounds_neighbourhood(bound):
+            assert bool(ENV.door_open(fresh(move=(0.5, 0), turn=(key, 0)))[0]) == authors_door_open(0.5, key)
+
+
+def bounds_neighbourhood(bound: float, ulps: int = 3) -> list[np.float32]:
+    """The float32 values within a few ulps of float32(bound)."""
+    keys = [np.float32(bound)]
+    for _ in range(ulps):
+        keys = [np.nextafter(keys[0], np.float32(-1))] + keys + [np.nextafter(keys[-1], np.float32(2))]
+    return keys
 
 
 def test_open_doors_stay_open():

@@ -28,6 +28,7 @@ from envs_jax.doorknobs.maps import (
     BOTTOM,
     LEFT,
     MAX_CLUTTER,
+    OPEN_TOLERANCE,
     RIGHT,
     ROBOT_RADIUS,
     ROOM_SIZE,
@@ -39,7 +40,6 @@ from envs_jax.doorknobs.maps import (
 )
 from planner.strips import Domain, LiftedOperator, Problem
 
-OPEN_TOLERANCE = 0.1  # a door opens when |knob rot - target| < 0.1 (the authors' DoorsEnv used 0.01)
 TRAIN_STEPS = 100
 SIDE_NAMES = ("bottom", "left")  # of the door slots a room owns
 MOVE_TO_DOOR, OPEN_DOOR, MOVE_THROUGH_DOOR = range(3)  # skill ids: the order of Doorknobs.skills
@@ -261,7 +261,8 @@ class Doorknobs(NoveltyEnv):
         blocked = self.collides(task, state.door_open, moved)
         touching = self.in_doorway(state) & ~state.door_open
         rot = jnp.where(touching, jnp.clip(state.knob_rot + action[2], 0.0, 1.0), state.knob_rot)
-        opens = touching & (jnp.abs(rot - task.knob_target) < OPEN_TOLERANCE)
+        # The authors' float64 test |rot - target| < 0.1, on float32 rotations (envs_jax.precision).
+        opens = touching & (rot >= task.knob_window[:, 0]) & (rot <= task.knob_window[:, 1])
         return state.replace(robot=jnp.where(blocked, state.robot, moved), knob_rot=rot,
                              door_open=state.door_open | opens)
 

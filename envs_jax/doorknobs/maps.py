@@ -19,6 +19,7 @@ from flax import struct
 
 from envs_jax import geometry
 from envs_jax.doorknobs import roadmap
+from envs_jax.precision import float32_window
 from planner.search import breadth_first_distances
 
 # ---- §3.1 constants --------------------------------------------------------------------------------
@@ -34,6 +35,7 @@ WALL_SEGMENT = (ROOM_SIZE + WALL_DEPTH - HALLWAY_WIDTH) / 2  # 0.38: the wall be
 DOOR_CENTRE = WALL_SEGMENT + HALLWAY_WIDTH / 2  # 0.505: the door's middle, from the room's corner
 IN_DOORWAY = WALL_DEPTH / 2 + DOORWAY_DEPTH  # 0.056: the "position in doorway", off the wall line
 KNOB_TARGET = 0.75  # every knob's target_rot (same_levels=True); knobs start at rot 0
+OPEN_TOLERANCE = 0.1  # a door opens when |knob rot - target| < 0.1 (the authors' DoorsEnv used 0.01)
 MAX_CLUTTER = 3
 ROOM_FRACTION = (0.25, 0.75)  # of the map's cells that become rooms
 TRAIN_MAP_SIZE, TEST_MAP_SIZE = 2, 5
@@ -283,6 +285,7 @@ class Task:
     door_mass: jax.Array  # float32[D]
     door_friction: jax.Array  # float32[D]
     knob_target: jax.Array  # float32[D]
+    knob_window: jax.Array  # float32[D, 2]: (lo, hi) of rotations that open the door (`float32_window`)
     robot_start: jax.Array  # float32[2]
     goal_room: jax.Array  # int32
     nodes: jax.Array  # float32[R, K, 2]: roadmap waypoints (clutter corners, approach and goal per side)
@@ -390,6 +393,7 @@ def task_arrays(spec: DoorknobsTask, map_size: int) -> Task:
             clutter[r, j], clutter_mask[r, j] = rect, True
     door_mask, door_rect, doorway, door_point = np.zeros(doors, bool), f32(doors, 5), f32(doors, 5), f32(doors, 2, 2)
     door_mass, door_friction = f32(doors), f32(doors)
+    knob_target = np.full(doors, KNOB_TARGET, np.float32)
     for (row, col, side), (mass, friction) in zip(spec.doors, spec.door_mass_friction):
         d = 2 * (row * m + col) + side
         door_rect[d], doorway[d], centre, normal = door_geometry(spec.size, row, col, side)
@@ -403,7 +407,8 @@ def task_arrays(spec: DoorknobsTask, map_size: int) -> Task:
     task = Task(room_xy=room_xy, room_mask=room_mask, walls=walls, wall_mask=wall_mask, clutter=clutter,
                 clutter_mask=clutter_mask, door_mask=door_mask, door_rect=door_rect, doorway=doorway,
                 door_point=door_point, door_mass=door_mass, door_friction=door_friction,
-                knob_target=np.full(doors, KNOB_TARGET, np.float32),
+                knob_target=knob_target,
+                knob_window=np.stack(float32_window(knob_target, OPEN_TOLERANCE, inclusive=False), -1),
                 robot_start=np.array(spec.robot, np.float32), goal_room=np.int32(goal_row * m + goal_col),
                 nodes=nodes.astype(np.float32), node_cost=f32(rooms, 4, NODES_PER_ROOM))
     return task.replace(node_cost=_roadmap_costs(task, layout(m)[1]))

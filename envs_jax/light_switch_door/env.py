@@ -2,7 +2,8 @@
 
 A row of cells; the robot starts in cell 0 and must switch on the light in the last cell. The novelty:
 doors. A closed door stops the robot from leaving the door's cell to the right; it opens when both of
-its keys are within 0.1 (inclusive) of their targets. The planner's model knows nothing of doors.
+its keys are within 0.1 (inclusive) of their targets, tested as the authors' float64 test would
+(`envs_jax.precision`). The planner's model knows nothing of doors.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import numpy as np
 from flax import struct
 
 from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
+from envs_jax.precision import float32_window
 from planner.strips import Domain, LiftedOperator, Problem
 
 MOVE_TARGET, TURN_TARGET, LIGHT_TARGET = 0.5, 0.75, 0.75  # same_levels=True
@@ -103,6 +105,8 @@ class Task:
     door_cell: jax.Array  # int32[D]; -1 marks padding
     move_target: jax.Array  # float32[D]
     turn_target: jax.Array  # float32[D]
+    move_window: jax.Array  # float32[D, 2]: the open test's (lo, hi), inclusive (`float32_window`)
+    turn_window: jax.Array  # float32[D, 2]
     light_target: jax.Array  # float32
 
 
@@ -195,9 +199,12 @@ class LightSwitchDoor(NoveltyEnv):
             raise ValueError(f"task {spec} exceeds capacity {self}")
         doors = np.full(self.max_doors, -1, np.int32)
         doors[: len(spec.door_cells)] = spec.door_cells
+        move_target = np.full(self.max_doors, MOVE_TARGET, np.float32)
+        turn_target = np.full(self.max_doors, TURN_TARGET, np.float32)
         return Task(num_cells=np.int32(spec.num_cells), door_cell=doors,
-                    move_target=np.full(self.max_doors, MOVE_TARGET, np.float32),
-                    turn_target=np.full(self.max_doors, TURN_TARGET, np.float32),
+                    move_target=move_target, turn_target=turn_target,
+                    move_window=np.stack(float32_window(move_target, DOOR_TOLERANCE, True), -1),
+                    turn_window=np.stack(float32_window(turn_target, DOOR_TOLERANCE, True), -1),
                     light_target=np.float32(LIGHT_TARGET))
 
     def planner_problem(self, spec: LightSwitchDoorTask) -> Problem:
@@ -248,9 +255,9 @@ class LightSwitchDoor(NoveltyEnv):
 
     def door_open(self, state: State) -> jax.Array:
         """bool[D]: both keys within the inclusive tolerance of their targets."""
-        def at(key, target):
-            return (key >= target - DOOR_TOLERANCE) & (key <= target + DOOR_TOLERANCE)
-        return at(state.move_key, state.task.move_target) & at(state.turn_key, state.task.turn_target)
+        def at(key, window):
+            return (key >= window[:, 0]) & (key <= window[:, 1])
+        return at(state.move_key, state.task.move_window) & at(state.turn_key, state.task.turn_window)
 
     def _light_on(self, state: State) -> jax.Array:
         return jnp.abs(state.light_level - state.task.light_target) < LIGHT_ON_TOLERANCE
