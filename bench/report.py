@@ -10,10 +10,9 @@ import shutil
 import sys
 from pathlib import Path
 
-from jaxbridge.learn.approaches import get_approach
 from jaxbridge.run.artifacts import REPORT_CYCLES, report_cells
-from jaxbridge.run.comparison import write_comparison
-from jaxbridge.run.experiments import is_experiment_dir, load_experiment
+from jaxbridge.run.comparison import run_labels, write_comparison
+from jaxbridge.run.experiments import is_experiment_dir, load_experiment, runs
 from jaxbridge.utils import stats
 
 # reference/results.md: test solve rate, mean [min, max] over the seeds with logs; smooth reward at 100.
@@ -45,9 +44,9 @@ def main() -> None:
     args = parser.parse_args()
     if not is_experiment_dir(args.experiment):
         sys.exit(f"error: {args.experiment} is not an experiment directory (no experiment.json)")
-    config, approaches = load_experiment(args.experiment)
-    approaches = [a for a in approaches if (args.experiment / a / "metrics.csv").is_file()]
-    rows = write_comparison(args.experiment, config.env, [get_approach(a) for a in approaches])
+    config, approaches, grid = load_experiment(args.experiment)
+    names = [n for n in runs(config, approaches, grid) if (args.experiment / n / "metrics.csv").is_file()]
+    rows = write_comparison(args.experiment, config.env, run_labels(names))
     authors = AUTHORS.get(config.env, {})
     seeds = stats.seed_range(sorted({s for row in rows for s in row["seeds"]}))
     print(f"Seeds {seeds}; mean [95% bootstrap CI] over seeds (the experiment's results.md adds the IQM)\n")

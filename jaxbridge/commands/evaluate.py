@@ -12,8 +12,9 @@ from jaxbridge.commands.envs import load_env
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import Controls
 from jaxbridge.core.tasks import evaluation_specs, make_batch
-from jaxbridge.learn.approaches import APPROACHES, get_approach
+from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.run.checkpoint import CheckpointError
+from jaxbridge.run.comparison import run_labels
 from jaxbridge.run.memory import TooBig, check_evaluation
 from jaxbridge.run.evaluate import evaluate_run, format_comparison, format_table, load_policy, run_bridge, summarise
 from jaxbridge.run.runner import load_config
@@ -185,8 +186,8 @@ def sweep_lines(args) -> dict[str, Path]:
         held = held_runs(args.runs[0])
         if not held:
             raise UsageError(f"{args.runs[0]} holds no runs yet")
-        order = [a for a in APPROACHES if a in held]
-        return {get_approach(a).label: args.runs[0] / a for a in order}
+        order = [name for a in APPROACHES for name in held if name.partition("@")[0] == a]  # with sweeps' settings
+        return {label: args.runs[0] / name for name, label in run_labels(order).items()}
     return {str(given): run_directory(given, args.approach) for given in args.runs}
 
 

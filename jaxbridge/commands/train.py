@@ -8,10 +8,12 @@ from pathlib import Path
 from typing import Callable
 
 from jaxbridge.commands.envs import load_env
+from jaxbridge.core import grid
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import preset_values
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.utils.cli import UsageError
+from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.stats import cell_text
 
 # train.py flags that set the run's config (flag name = config field); --resume takes the saved config.
@@ -25,7 +27,10 @@ def make_config(flags: dict) -> tuple[TrainConfig, type]:
     given = {field: flags[field] for field in CONFIG_FLAGS if flags.get(field) is not None}
     spec = given.pop("env", TrainConfig.env)
     env_cls = load_env(spec)
-    config = TrainConfig(env=spec, **{**preset_values(given.pop("preset", TrainConfig.preset), env_cls), **given})
+    try:
+        config = TrainConfig(env=spec, **{**preset_values(given.pop("preset", TrainConfig.preset), env_cls), **given})
+    except ValueError as err:  # a value out of its range, e.g. a negative bonus
+        raise UsageError(str(err)) from None
     if config.test_protocol not in env_cls.test_protocols:
         raise UsageError(f"--test-protocol {config.test_protocol!r}: {env_cls.name} has "
                          f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}")
@@ -56,11 +61,21 @@ def default_approaches(env_cls) -> list[str]:
     return approaches
 
 
+def sweep_grid(texts: list[str] | None) -> dict[str, tuple]:
+    """The hyperparameter grid of the --sweep flags ({} without any), refused in one line if invalid."""
+    try:
+        return grid.parse_sweeps(texts or [])
+    except ValueError as err:
+        raise UsageError(str(err)) from None
+
+
 def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: str | None, overwrite: bool,
                    progress: bool, workers: int | None, devices: list, max_memory: float | None = None,
                    interrupts=None, tensorboard: bool = False) -> tuple[Path, Callable[[], dict]]:
     """(experiment directory, the training to run) of a new experiment; the directory is locked. A run
     whose memory estimate exceeds `max_memory` GiB (default: what is available) is refused first."""
+    import dataclasses
+
     from jaxbridge.learn.devices import default_workers
     from jaxbridge.run import memory, rundir
 
@@ -70,31 +85,34 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
         except rundir.RunDirError as err:
             raise UsageError(str(err)) from None
     config, env_cls = make_config(flags)
+    hyper_grid = sweep_grid(flags.get("sweep"))
     approaches = approaches or default_approaches(env_cls)
+    settings = len(grid.settings(hyper_grid))  # trained side by side, as more seeds (the worst case)
     try:
-        memory.check_training(config, env_cls, approaches, workers or default_workers(approaches),
-                              None if max_memory is None else int(max_memory * 2**30))
+        memory.check_training(dataclasses.replace(config, num_seeds=config.num_seeds * settings), env_cls, approaches,
+                              workers or default_workers(approaches), None if max_memory is None else int(max_memory * 2**30))
     except memory.TooBig as err:
         raise UsageError(str(err)) from None
     check_reachable(config, env_cls)
+    out_dir, replaced, lock = out / (name or env_cls.name), None, None
     try:
-        out_dir = out / (name or env_cls.name)
-        replaced = rundir.prepare(out_dir, overwrite)
-        lock = rundir.RunLock(out_dir).acquire()
+        if is_primary():  # the other processes of a multi-process run write nothing (utils/distributed.py)
+            replaced = rundir.prepare(out_dir, overwrite)
+            lock = rundir.RunLock(out_dir).acquire()
     except rundir.RunDirError as err:
         raise UsageError(str(err)) from None
     except OSError as err:
         raise UsageError(f"cannot write experiment directory {out / (name or env_cls.name)}: {err.strerror}") from None
     from jaxbridge.run.experiments import train_approaches  # after the refusals: it loads orbax (~0.2 s)
     return out_dir, _releasing(lock, lambda: train_approaches(config, approaches, out_dir, progress, workers=workers,
-                                                              devices=devices, replaced=replaced,
+                                                              devices=devices, replaced=replaced, grid=hyper_grid,
                                                               **_watch(interrupts, tensorboard)))
 
 
 def check_resume_flags(flags: dict) -> None:
     """--resume takes the saved config: refuse the flags that would set another."""
     clashing = [f"--{flag.replace('_', '-')}" for flag in CONFIG_FLAGS if flags.get(flag) is not None]
-    clashing += [f"--{flag}" for flag in ("overwrite", "name", "approaches") if flags.get(flag)]
+    clashing += [f"--{flag}" for flag in ("overwrite", "name", "approaches", "sweep") if flags.get(flag)]
     if clashing:
         raise UsageError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")
 
@@ -105,22 +123,22 @@ def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list, i
     from jaxbridge.learn.setup import make_setup
     from jaxbridge.run import rundir
     from jaxbridge.run.checkpoint import CheckpointError
-    from jaxbridge.run.experiments import check_resumable, is_experiment_dir, load_experiment, train_approaches
+    from jaxbridge.run.experiments import check_resumable, is_experiment_dir, load_experiment, runs, train_approaches
     from jaxbridge.run.runner import load_config, train
 
     try:
         if is_experiment_dir(run_dir):
-            config, approaches = load_experiment(run_dir)
+            config, approaches, hyper_grid = load_experiment(run_dir)
             load_env(config.env)
-            check_resumable(run_dir, approaches)
+            check_resumable(run_dir, list(runs(config, approaches, hyper_grid)))
             run = lambda: train_approaches(config, approaches, run_dir, progress, resume=True, workers=workers,
-                                           devices=devices, **_watch(interrupts, tensorboard))
+                                           devices=devices, grid=hyper_grid, **_watch(interrupts, tensorboard))
         else:
             config = load_config(run_dir)
             setup = make_setup(config, load_env(config.env))
             run = lambda: {config.approach: train(setup, run_dir, progress, resume=True, devices=devices,
                                                   **_watch(interrupts, tensorboard))}
-        return _releasing(rundir.RunLock(run_dir).acquire(), run)
+        return _releasing(rundir.RunLock(run_dir).acquire() if is_primary() else None, run)
     except (ValueError, CheckpointError, rundir.RunDirError) as err:
         raise UsageError(str(err)) from None
 
@@ -133,12 +151,13 @@ def _watch(interrupts, tensorboard: bool = False) -> dict:
 
 
 def _releasing(lock, run: Callable[[], dict]) -> Callable[[], dict]:
-    """`run`, releasing `lock` however it ends."""
+    """`run`, releasing `lock` (if any) however it ends."""
     def locked():
         try:
             return run()
         finally:
-            lock.release()
+            if lock is not None:
+                lock.release()
     return locked
 
 
@@ -192,6 +211,8 @@ def main(args, devices: list) -> int:
         os._exit(EXIT_CANNOT_WRITE)  # at once: orbax's unfinished writes would report at interpreter exit
     finally:
         interrupts.restore()
+    if not is_primary():  # process 0 reports for a multi-process run
+        return 0
     print(f"done in {time.perf_counter() - start:.0f} s -> {out_dir}/"
           + ("  (figure: curves.png, tables: results.md)" if is_experiment_dir(out_dir) else ""))
     for name, info in summaries.items():

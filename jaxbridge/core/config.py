@@ -12,6 +12,23 @@ from dataclasses import dataclass
 CONFIG_VERSION = 4
 
 
+# The numeric hyperparameters that change no shape or program: pytree leaves of the cycle
+# (learn/hyper.Hyper), so that one compiled program trains every setting of a sweep. Not polyak_tau:
+# XLA fuses a traced tau's products into multiply-adds other than a constant's, so a slot's last bits
+# would differ from a plain run's; a sweep over it compiles a program per value.
+LEAF_FIELDS = ("learning_rate", "gamma", "grad_clip", "call_planner_bonus", "epsilon_start", "epsilon_end",
+               "epsilon_decay")
+
+# The numeric fields' ranges, checked whenever a config is made: (low, high, low inclusive).
+RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip": (0, None, False),
+          "polyak_tau": (0, 1, False), "call_planner_bonus": (0, None, True), "epsilon_start": (0, 1, True),
+          "epsilon_end": (0, 1, True), "epsilon_decay": (0, None, True), "num_seeds": (1, None, True),
+          "cycles": (1, None, True), "episodes_per_cycle": (1, None, True), "train_steps": (1, None, True),
+          "num_test_tasks": (1, None, True), "updates_per_cycle": (0, None, True), "batch_size": (1, None, True),
+          "q_ensemble": (1, None, True), "n_sample": (1, None, True), "n_target_sample": (1, None, True),
+          "buffer_capacity": (1, None, True), "checkpoint_every": (1, None, True), "seed_block": (1, None, True),
+          "first_seed": (0, None, True)}
+
 # The string options and what they may be.
 CHOICES = {"polyak_per": ("update", "decision"), "activation": ("leaky_relu", "relu"),
            "target_init": ("copy", "apart")}
@@ -111,6 +128,13 @@ class TrainConfig:
         for field, allowed in CHOICES.items():
             if getattr(self, field) not in allowed:
                 raise ValueError(f"{field} must be one of {', '.join(allowed)}, got {getattr(self, field)!r}")
+        for field, (low, high, low_included) in RANGES.items():
+            value = getattr(self, field)
+            if value < low or (value == low and not low_included) or (high is not None and value > high):
+                where = f"{'at least' if low_included else 'above'} {low}" + (f" and at most {high}" if high is not None else "")
+                raise ValueError(f"{field} must be {where}, got {value}")
+        if not self.hidden_sizes or min(self.hidden_sizes) < 1:
+            raise ValueError(f"hidden_sizes must be one or more positive widths, got {self.hidden_sizes}")
 
     def to_dict(self) -> dict:
         return {**dataclasses.asdict(self), "hidden_sizes": list(self.hidden_sizes),

@@ -12,6 +12,7 @@ from flax import struct
 
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
                                       candidate_skills, input_size)
@@ -46,6 +47,11 @@ class DQN:
     split: StateSplit | None = None
 
     @property
+    def hyper(self) -> Hyper:
+        """The config's numeric hyperparameters as constants (a cycle passes its slots' instead)."""
+        return Hyper.of(self.config)
+
+    @property
     def stored_features(self) -> int:
         """The width of an observation in the replay buffer: with a split, only its varying entries."""
         return self.num_features if self.split is None else len(self.split.varying)
@@ -66,17 +72,17 @@ def q_network(config: TrainConfig) -> QNetwork:
     return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation)
 
 
-def make_optimizer(config: TrainConfig) -> optax.GradientTransformation:
-    return clipped_adam(config.grad_clip, config.learning_rate)
+def make_optimizer(hyper: Hyper | TrainConfig) -> optax.GradientTransformation:
+    return clipped_adam(hyper.grad_clip, hyper.learning_rate)
 
 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
     return DQN(env, config, q_network(config), make_optimizer(config), num_features, split)
 
 
-def epsilon(config: TrainConfig, decisions: jax.Array) -> jax.Array:
+def epsilon(hyper: Hyper | TrainConfig, decisions: jax.Array) -> jax.Array:
     """Linear annealing per training bridge decision, floored at epsilon_end."""
-    return jnp.maximum(config.epsilon_end, config.epsilon_start - config.epsilon_decay * decisions)
+    return jnp.maximum(hyper.epsilon_end, hyper.epsilon_start - hyper.epsilon_decay * decisions)
 
 
 def stored_transitions(dqn: DQN, transitions: Transition) -> Transition:
@@ -117,11 +123,13 @@ def init_learner(dqn: DQN, key: jax.Array) -> Learner:
 
 
 def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key: jax.Array,
-               task: TaskPart | None = None) -> jax.Array:
+               task: TaskPart | None = None, hyper: Hyper | None = None) -> jax.Array:
     """Double DQN: the online net picks a* among the next state's applicable actions (n_target_sample
     parameter samples per skill), the target net values it; no bootstrapping past `done`. With a split,
-    `task` holds the training tasks' constants and `batch.task` indexes them."""
+    `task` holds the training tasks' constants and `batch.task` indexes them. `hyper`: the numeric
+    hyperparameters (default: the config's)."""
     env, config, net = dqn.env, dqn.config, dqn.net
+    hyper = dqn.hyper if hyper is None else hyper
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
     best, _ = jax.vmap(lambda f, g, k, i: best_candidate(env, net, params, f, g, skills, k, at_task(task, i)))(
@@ -129,14 +137,17 @@ def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key
     next_q = net.apply(target_params, batch_input(env, batch.next_features, best.skill, best.param,
                                                   at_task(task, batch.task)))
     if config.clip_bootstrap:
-        next_q = jnp.clip(next_q, 0.0, 1.0 + config.call_planner_bonus)
-    return batch.reward + config.gamma * jnp.where(batch.done, 0.0, next_q)
+        next_q = jnp.clip(next_q, 0.0, 1.0 + hyper.call_planner_bonus)
+    # gamma inside the select: a traced gamma's product next to the sum is fused into a multiply-add,
+    # a constant's is not (learn/hyper.py); this way both round the product first.
+    return batch.reward + jnp.where(batch.done, 0.0, hyper.gamma * next_q)
 
 
 RELABEL_CHUNK = 1024
 
 
-def relabel(dqn: DQN, learner: Learner, key: jax.Array, task: TaskPart | None = None) -> jax.Array:
+def relabel(dqn: DQN, learner: Learner, key: jax.Array, task: TaskPart | None = None,
+            hyper: Hyper | None = None) -> jax.Array:
     """float32[capacity]: TD targets of every stored transition, recomputed once per cycle with the
     current nets (as the authors' code does), in chunks up to the buffer's fill level."""
     buffer = learner.buffer
@@ -148,7 +159,7 @@ def relabel(dqn: DQN, learner: Learner, key: jax.Array, task: TaskPart | None = 
         batch = jax.tree.map(lambda x: x[i], data)
         slots = i * RELABEL_CHUNK + jnp.arange(RELABEL_CHUNK)
         batch = batch.replace(next_features=successor_features(buffer.data.features, slots))
-        y = td_targets(dqn, learner.params, learner.target_params, batch, jax.random.fold_in(key, i), task)
+        y = td_targets(dqn, learner.params, learner.target_params, batch, jax.random.fold_in(key, i), task, hyper)
         return targets.at[i].set(y)
 
     filled = (buffer.size + RELABEL_CHUNK - 1) // RELABEL_CHUNK
@@ -157,10 +168,11 @@ def relabel(dqn: DQN, learner: Learner, key: jax.Array, task: TaskPart | None = 
 
 
 def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array,
-                task: TaskPart | None = None) -> tuple[Learner, jax.Array]:
+                task: TaskPart | None = None, hyper: Hyper | None = None) -> tuple[Learner, jax.Array]:
     """One Adam step on the minibatch of (transition, target) at buffer slots `index`, then a polyak
     step of the target net."""
     env, config, net = dqn.env, dqn.config, dqn.net
+    hyper = dqn.hyper if hyper is None else hyper
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
 
     def loss_fn(params):
@@ -169,7 +181,7 @@ def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array
         return jnp.mean((q - targets[index]) ** 2), jnp.max(jnp.abs(q))  # every member fits the targets
 
     (loss, q_abs_max), grads = jax.value_and_grad(loss_fn, has_aux=True)(learner.params)
-    updates, opt_state = dqn.optimizer.update(grads, learner.opt_state, learner.params)
+    updates, opt_state = make_optimizer(hyper).update(grads, learner.opt_state, learner.params)
     params = optax.apply_updates(learner.params, updates)
     target = learner.target_params
     if config.polyak_per == "update":
@@ -203,16 +215,19 @@ def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) ->
     return learner.replace(target_params=target)
 
 
-def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None) -> tuple[Learner, jax.Array, jax.Array]:
+def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None,
+          hyper: Hyper | None = None) -> tuple[Learner, jax.Array, jax.Array]:
     """After a cycle's episodes (`decisions` training bridge decisions): track the target net, relabel
     the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty). `tasks`:
-    the training tasks the buffer's `task` indices refer to (needed with a split).
+    the training tasks the buffer's `task` indices refer to (needed with a split); `hyper`: the numeric
+    hyperparameters (default: the config's).
     Returns the learner, the mean loss and the largest |Q| predicted in the minibatches."""
     config = dqn.config
+    hyper = dqn.hyper if hyper is None else hyper
     task = dqn.task_part(tasks)
     learner = track_target(config, learner, decisions)
     key, k_relabel = jax.random.split(learner.key)
-    targets = relabel(dqn, learner, k_relabel, task)
+    targets = relabel(dqn, learner, k_relabel, task, hyper)
     learner = learner.replace(key=key)
     if config.reset_optimizer:  # the authors' new Adam for every cycle's fit
         learner = learner.replace(opt_state=dqn.optimizer.init(learner.params))
@@ -223,7 +238,7 @@ def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None) -
     ready = learner.buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
 
     def body(learner, index):
-        updated, (loss, q_abs_max) = update_step(dqn, learner, targets, index, task)
+        updated, (loss, q_abs_max) = update_step(dqn, learner, targets, index, task, hyper)
         stats = (jnp.where(ready, loss, 0.0), jnp.where(ready, q_abs_max, 0.0))
         # Selecting per update rather than once after the scan: the same values, but XLA fuses the
         # update differently without it and the last bits change (the runs in docs/ would not reproduce).

@@ -16,10 +16,12 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
+from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import TaskArrays
 from jaxbridge.learn.devices import SeedMesh
 from jaxbridge.learn.dqn import Learner, epsilon, learn, stored_transitions
+from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.learn.replay import add
 from jaxbridge.learn.setup import Setup
@@ -59,8 +61,8 @@ def _by_seed(tree, seeds: int):
 
 
 def make_seed_cycle(setup: Setup) -> Callable:
-    """One seed's cycle: (learner, its training TaskArrays, its test TaskArrays) -> (learner, CycleMetrics
-    of scalars). The same computation for every seed."""
+    """One seed's cycle: (learner, its training TaskArrays, its test TaskArrays, its Hyper) -> (learner,
+    CycleMetrics of scalars). The same computation for every seed and setting."""
     config, approach, train, test = setup.config, setup.approach, setup.train, setup.test
     controls = approach.controls
     train_bridge, test_bridge = setup.bridge(train.env), setup.bridge(test.env)
@@ -81,11 +83,12 @@ def make_seed_cycle(setup: Setup) -> Callable:
         raise ValueError(f"{episodes} episodes x {config.train_steps} steps per cycle must fit the replay buffer "
                          f"({config.buffer_capacity} transitions)")
 
-    def seed_cycle(learner: Learner, train_tasks: TaskArrays, test_tasks: TaskArrays) -> tuple[Learner, CycleMetrics]:
+    def seed_cycle(learner: Learner, train_tasks: TaskArrays, test_tasks: TaskArrays,
+                   hyper: Hyper) -> tuple[Learner, CycleMetrics]:
         k_next, k_train, k_learn, k_test = jax.random.split(learner.key, 4)
 
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
-        eps = epsilon(config, learner.decisions)
+        eps = epsilon(hyper, learner.decisions)
         explore = bridge_params(learner.params, eps, episodes)
         result, records = rollout(train.env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
                                   config.train_steps, record=approach.learns, controls=controls, shared_params=shared)
@@ -94,13 +97,13 @@ def make_seed_cycle(setup: Setup) -> Callable:
         if approach.learns:
             # 2. One transition per bridge decision into the replay buffer.
             transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
-                records, result.success, call_planner, config.call_planner_bonus)
+                records, result.success, call_planner, hyper.call_planner_bonus)
             flat = lambda x: x.reshape((-1,) + x.shape[2:])
             buffer = add(learner.buffer, jax.tree.map(flat, stored_transitions(setup.dqn, transitions)), flat(valid))
             learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)
 
             # 3. Double-DQN updates.
-            learner, loss, q_abs_max = learn(setup.dqn, learner, decisions, train_tasks.tasks)
+            learner, loss, q_abs_max = learn(setup.dqn, learner, decisions, train_tasks.tasks, hyper)
         else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
             learner = learner.replace(decisions=learner.decisions + decisions)
             eps = jnp.float32(1.0 if approach.bridge == "random" else 0.0)
@@ -123,20 +126,26 @@ def make_seed_cycle(setup: Setup) -> Callable:
 
 
 class Cycle:
-    """One jitted cycle of every seed: `cycle(learners) -> (learners, metrics)`.
+    """One jitted cycle of every slot: `cycle(learners) -> (learners, metrics)`.
 
-    Learners and metrics carry the placed seed axis of `seeds` (padded to a multiple of the device
-    count and sharded over the devices: `seeds.place(init_learners(...))`, `seeds.unpad(...)`); with
-    one device, or seeds divisible by the device count, that is just the seed axis. Each device runs
-    the per-seed cycle on its seeds one after another (learn/devices.py), so the numbers do not
-    depend on the device count."""
+    A slot is a (setting, seed) pair, setting-major: `settings` are configs that differ from
+    `setup.config` only in their numeric hyperparameters (config.LEAF_FIELDS; default: that config
+    alone), and each passes its values to its seeds' slots as leaves (learn/hyper.py), so one program
+    serves them all. Learners and metrics carry the placed slot axis of `seeds` (padded to a multiple of
+    the device count and sharded over the devices: `seeds.place(...)`, `seeds.unpad(...)`). Each device
+    runs the per-seed cycle on its slots one after another (learn/devices.py), so the numbers depend
+    neither on the device count nor on the other settings."""
 
-    def __init__(self, setup: Setup, seeds: SeedMesh | None = None):
-        config = setup.config
-        self.seeds = seeds or SeedMesh(config.num_seeds, block=config.seed_block)
-        assert (self.seeds.num_seeds, self.seeds.block) == (config.num_seeds, config.seed_block)
-        num_seeds = config.num_seeds
-        self._inputs = self.seeds.place(_by_seed((setup.train.arrays, setup.test.arrays), num_seeds))
+    def __init__(self, setup: Setup, seeds: SeedMesh | None = None, settings: list[TrainConfig] | None = None):
+        config, settings = setup.config, settings or [setup.config]
+        slots = len(settings) * config.num_seeds
+        self.seeds = seeds or SeedMesh(slots, block=config.seed_block)
+        assert (self.seeds.num_seeds, self.seeds.block) == (slots, config.seed_block)
+        tasks = _by_seed((setup.train.arrays, setup.test.arrays), config.num_seeds)
+        if len(settings) > 1:  # every setting trains and tests on the seeds' tasks
+            tasks = jax.tree.map(lambda x: jnp.concatenate([x] * len(settings)), tasks)
+        hypers = jax.tree.map(lambda *v: np.repeat(np.stack(v), config.num_seeds), *map(Hyper.of, settings))
+        self._inputs = self.seeds.place((*tasks, hypers))
         self._real = self.seeds.real()
         # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical
         # fault during a cycle can still checkpoint the last good one.
@@ -147,4 +156,3 @@ class Cycle:
 
     def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
         return self._run(self._real, learners, *self._inputs)
-

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxbridge.learn.approaches import Approach
+from jaxbridge.learn.approaches import get_approach
 from jaxbridge.run.artifacts import REPORT_CYCLES, STATISTICS_NOTE, curve_statistics, plot_curves, report_cells
 from jaxbridge.utils import stats
 from jaxbridge.utils.files import write_atomic
@@ -33,20 +33,20 @@ def read_metrics(run_dir: Path, fields=("test_solve_rate", "train_success_rate")
     return {**out, "seeds": seeds}
 
 
-def summary_rows(metrics: dict[Approach, dict[str, np.ndarray]]) -> list[dict]:
-    """One row per approach ({approach: read_metrics(...)}): its per-cycle statistics over seeds
+def summary_rows(metrics: dict[str, tuple[str, dict[str, np.ndarray]]]) -> list[dict]:
+    """One row per run ({run name: (label, read_metrics(...))}): its per-cycle statistics over seeds
     (artifacts.curve_statistics) and its seeds."""
-    return [{"approach": approach.name, "label": approach.label, "seeds": m["seeds"],
-             "cycles": m["test_solve_rate"].shape[1],
+    return [{"approach": name, "label": label, "seeds": m["seeds"], "cycles": m["test_solve_rate"].shape[1],
              "curves": curve_statistics(m["test_solve_rate"], m["train_success_rate"])}
-            for approach, m in metrics.items()]
+            for name, (label, m) in metrics.items()]
 
 
 CSV_STATISTICS = (*(f"{name}{end}" for name in stats.STATISTICS for end in ("", "_low", "_high")), "min", "max")
 
 
 def results_csv(rows: list[dict]) -> str:
-    """One row per approach and cycle: every statistic of every curve (artifacts.curve_statistics)."""
+    """One row per run (approach, or approach@setting) and cycle: every statistic of every curve
+    (artifacts.curve_statistics)."""
     out = io.StringIO()
     writer = csv.writer(out)
     names = list(rows[0]["curves"])
@@ -80,12 +80,22 @@ def results_markdown(env: str, rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_comparison(experiment_dir: Path, env: str, approaches: list[Approach]) -> list[dict]:
-    """curves.png (one line per approach, mean with its 95% CI and min-max bands), results.md and results.csv."""
-    rows = summary_rows({a: read_metrics(experiment_dir / a.name) for a in approaches})
+def write_comparison(experiment_dir: Path, env: str, runs: dict[str, str]) -> list[dict]:
+    """curves.png (one line per run, mean with its 95% CI and min-max bands), results.md and results.csv;
+    `runs`: {run directory name: label}, e.g. {"ours": "ours"} (experiments.run_labels)."""
+    rows = summary_rows({name: (label, read_metrics(experiment_dir / name)) for name, label in runs.items()})
     seeds = sorted({s for r in rows for s in r["seeds"]})
     curves = {r["label"]: r["curves"] for r in rows}
     write_atomic(experiment_dir / "curves.png", plot_curves(curves, f"{env}, seeds {stats.seed_range(seeds)}"))
     write_atomic(experiment_dir / "results.md", results_markdown(env, rows))
     write_atomic(experiment_dir / "results.csv", results_csv(rows))
     return rows
+
+
+def run_labels(names: list[str]) -> dict[str, str]:
+    """{run directory name: its line's label}: the approach's label, then its setting if any."""
+    labels = {}
+    for name in names:
+        approach, _, setting = name.partition("@")
+        labels[name] = get_approach(approach).label + (f" {setting}" if setting else "")
+    return labels

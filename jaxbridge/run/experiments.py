@@ -16,12 +16,13 @@ from pathlib import Path
 
 
 from envs_jax import env_class
+from jaxbridge.core import grid as hyper_grid
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.devices import default_workers, split_devices
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint, comparison, rundir
-from jaxbridge.run.runner import Interrupted, train
+from jaxbridge.run.runner import Interrupted, train_settings
+from jaxbridge.utils.distributed import is_primary, multi_process
 from jaxbridge.utils.files import WriteError, write_atomic
 from jaxbridge.utils.progress import cycle_progress
 
@@ -36,19 +37,32 @@ def is_experiment_dir(path: Path) -> bool:
     return (path / EXPERIMENT_FILE).is_file()
 
 
-def load_experiment(experiment_dir: Path) -> tuple[TrainConfig, list[str]]:
-    """The base config and approach list of an experiment directory."""
+def load_experiment(experiment_dir: Path) -> tuple[TrainConfig, list[str], dict[str, tuple]]:
+    """The base config, approach list and hyperparameter grid ({} if none) of an experiment directory."""
     try:
         data = json.loads((experiment_dir / EXPERIMENT_FILE).read_text())
-        return TrainConfig.from_dict(data["config"]), list(data["approaches"])
-    except (OSError, KeyError, TypeError, json.JSONDecodeError) as err:
+        grid = {key: tuple(tuple(v) if isinstance(v, list) else v for v in values)
+                for key, values in data.get("sweep", {}).items()}
+        return TrainConfig.from_dict(data["config"]), list(data["approaches"]), grid
+    except (OSError, KeyError, TypeError, AttributeError, json.JSONDecodeError) as err:
         raise ValueError(f"{experiment_dir / EXPERIMENT_FILE} is not a valid experiment file: {err}") from None
 
 
-def check_resumable(experiment_dir: Path, approaches: list[str]) -> None:
-    """Refuse (CheckpointError) to resume an experiment an approach of which has results but no checkpoint
+def runs(config: TrainConfig, approaches: list[str], grid: dict[str, tuple] | None = None) -> dict[str, TrainConfig]:
+    """{run directory name: its config}: one run per approach, or per approach and setting of `grid`
+    (named approach@setting, e.g. ours@learning_rate=0.0003,gamma=0.9)."""
+    named = {}
+    for approach in approaches:
+        for setting in hyper_grid.settings(grid or {}):
+            name = f"{approach}@{hyper_grid.setting_name(setting)}" if setting else approach
+            named[name] = dataclasses.replace(config, approach=approach, **setting)
+    return named
+
+
+def check_resumable(experiment_dir: Path, names: list[str]) -> None:
+    """Refuse (CheckpointError) to resume an experiment a run of which has results but no checkpoint
     left: resuming would silently train it again from scratch."""
-    for name in approaches:
+    for name in names:
         run_dir = experiment_dir / name
         if (run_dir / "metrics.csv").is_file() and not checkpoint.sealed_steps(run_dir / "checkpoints"):
             raise checkpoint.CheckpointError(f"{run_dir} has results but no complete checkpoint to resume from; "
@@ -58,47 +72,59 @@ def check_resumable(experiment_dir: Path, approaches: list[str]) -> None:
 def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
                      resume: bool = False, workers: int | None = None, devices: list | None = None,
                      replaced: Path | None = None, stop: threading.Event | None = None,
-                     trained: threading.Event | None = None, tensorboard: bool = False) -> dict[str, dict]:
-    """Train every approach (run directory `experiment_dir/<approach>`), `workers` at a time, then write
-    the comparison files (figure, results.md, results.csv), also after a fault or Ctrl-C for the
-    approaches that have files. With `resume`, finished approaches are kept, started ones continue
-    from their checkpoint and the others start. `replaced`: the run this one replaces, moved aside, deleted
-    once this one's experiment file is written. `stop` (set by another thread) stops every approach after
-    its current cycle, checkpointed; `trained` is set after any cycle completes; `tensorboard`: event files
-    per approach (run/tensorboard.py). Returns each approach's summary, in list order."""
+                     trained: threading.Event | None = None, tensorboard: bool = False,
+                     grid: dict[str, tuple] | None = None) -> dict[str, dict]:
+    """Train every approach (run directory `experiment_dir/<approach>`), or with a hyperparameter `grid`
+    every approach and setting (`experiment_dir/<approach>@<setting>`), then write the comparison files
+    (figure, results.md, results.csv), also after a fault or Ctrl-C for the runs that have files. Runs
+    that differ only in leaf hyperparameters train as one program (runner.train_settings); the programs
+    train `workers` at a time. With `resume`, finished runs are kept, started ones continue from their
+    checkpoint and the others start. `replaced`: the run this one replaces, moved aside, deleted once
+    this one's experiment file is written. `stop` (set by another thread) stops every program after its
+    current cycle, checkpointed; `trained` is set after any cycle completes; `tensorboard`: event files
+    per run (run/tensorboard.py). Returns each run's summary, in order."""
+    named, primary = runs(config, approaches, grid), is_primary()  # only process 0 writes files
     if resume:
-        check_resumable(experiment_dir, approaches)
-    else:
+        check_resumable(experiment_dir, list(named))
+    elif primary:
         write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
-            {"config": config.to_dict(), "approaches": approaches}, indent=2) + "\n")
+            {"config": config.to_dict(), "approaches": approaches,
+             **({"sweep": {k: list(v) for k, v in grid.items()}} if grid else {})}, indent=2) + "\n")
         rundir.discard(replaced)
-    workers = workers or default_workers(approaches)
+    names = list(named)
+    programs = [[names[i] for i in group] for group in hyper_grid.program_groups(list(named.values()))]
+    # Across processes the programs take turns, in the same order everywhere: the gathers after each
+    # cycle are collective, and two programs' gathers must not cross.
+    workers = 1 if multi_process() else workers or default_workers(programs)
     env_cls = env_class(config.env)  # resolved once for every approach
-    bar = cycle_progress(config.cycles * len(approaches), f"{config.env} x{config.num_seeds} seeds, "
-                         f"{len(approaches)} approaches", progress)
+    what = f"{len(approaches)} approaches" + (f" x {len(names) // len(approaches)} settings" if grid else "")
+    bar = cycle_progress(config.cycles * len(programs), f"{config.env} x{config.num_seeds} seeds, {what}",
+                         progress and primary)
     stop = stop or threading.Event()
     device_shares = queue.SimpleQueue()  # a worker takes a share of the devices per approach, then returns it
-    for share in split_devices(devices, min(workers, len(approaches))):
+    for share in split_devices(devices, min(workers, len(programs))):
         device_shares.put(share)
 
-    def run(name: str) -> dict:
-        if stop.is_set():  # interrupted before this approach's turn
+    def run(program: list[str]) -> list[dict]:
+        if stop.is_set():  # interrupted before this program's turn
             raise Interrupted(0)
-        run_dir = experiment_dir / name
-        started = (run_dir / "checkpoints").is_dir() and bool(checkpoint.sealed_steps(run_dir / "checkpoints"))
-        if not started:
-            rundir.fresh(run_dir)
+        run_dirs = [experiment_dir / name for name in program]
+        started = all((d / "checkpoints").is_dir() and checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
+        if not started and primary:
+            for run_dir in run_dirs:
+                rundir.fresh(run_dir)
         share = device_shares.get()
         try:
-            return train(make_setup(dataclasses.replace(config, approach=name), env_cls), run_dir, resume=started,
-                         bar=bar, stop=stop, devices=share, trained=trained, tensorboard=tensorboard)
+            return train_settings(make_setup(named[program[0]], env_cls), [(named[n], experiment_dir / n) for n in program],
+                                  resume=started, bar=bar, stop=stop, devices=share, trained=trained,
+                                  tensorboard=tensorboard)
         finally:
             device_shares.put(share)
 
-    order, unwritable = sorted(approaches, key=lambda a: -COST.get(a, 0)), False
+    order, unwritable = sorted(programs, key=lambda p: -COST.get(named[p[0]].approach, 0) * len(p)), False
     try:
         with ThreadPoolExecutor(workers, thread_name_prefix="approach") as pool:
-            futures = {name: pool.submit(run, name) for name in order}
+            futures = {program[0]: pool.submit(run, program) for program in order}
             try:
                 # Wake up now and then: the OS may deliver Ctrl-C's SIGINT to a worker thread, and Python
                 # only runs the handler (raising KeyboardInterrupt here) when the main thread runs.
@@ -116,15 +142,17 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         if faults:
             raise faults[0]
         if errors:
-            cycles = ", ".join(f"{n} {futures[n].exception().cycle}" for n in approaches
+            cycles = ", ".join(f"{n} {futures[n].exception().cycle}" for n in futures
                                if isinstance(futures[n].exception(), Interrupted))
             raise Interrupted(-1, f"interrupted; checkpoints saved ({cycles} cycles done)")
-        return {name: futures[name].result() for name in approaches}
+        infos = {name: info for program in programs for name, info in zip(program, futures[program[0]].result())}
+        return {name: infos[name] for name in names}
     except WriteError:
         unwritable = True
         raise
     finally:
         bar.close()
-        done = [a for a in approaches if (experiment_dir / a / "metrics.csv").is_file()]
-        if done and not unwritable:
-            comparison.write_comparison(experiment_dir, config.env, [get_approach(a) for a in done])
+        done = [n for n in names if (experiment_dir / n / "metrics.csv").is_file()]
+        if done and primary and not unwritable:
+            comparison.write_comparison(experiment_dir, config.env, comparison.run_labels(done))
+

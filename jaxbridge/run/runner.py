@@ -18,6 +18,7 @@ from jaxbridge.learn.online import Cycle, CycleMetrics
 from jaxbridge.learn.setup import Setup, make_setup
 from jaxbridge.run import artifacts, checkpoint
 from jaxbridge.run.tensorboard import CycleEvents
+from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.files import WriteError, write_atomic
 from jaxbridge.utils.progress import cycle_progress
 
@@ -87,64 +88,91 @@ def _fault(metrics: CycleMetrics, cycle: int, seeds: list[int], last_saved: int)
             f"{seeds[int(np.argmax(bad))]}; stopped before any checkpoint")
 
 
-def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = False,
-          fault_injection: Callable | None = None, bar=None,
-          stop: threading.Event | None = None, devices: list | None = None,
-          trained: threading.Event | None = None, tensorboard: bool = False) -> dict:
-    """Run the cycles of `setup.config` (continuing the latest checkpoint with `resume`), writing the run
-    files and checkpoints into `run_dir`. `fault_injection(cycle, learners) -> learners` lets tests
-    corrupt the state before a cycle (seed i is slot i of the leading axis). `bar`: a progress bar
-    shared with other runs (else its own). `stop`: when set (by another thread), checkpoint the last
-    completed cycle and raise Interrupted; `trained` is set after each completed cycle. `devices`: the seed axis is sharded over them (default: the
-    first local device); the numbers do not depend on them, and a run may resume on others. `tensorboard`:
-    also log each cycle to TensorBoard event files (run/tensorboard.py)."""
-    start, config = time.perf_counter(), setup.config
+def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = False, **options) -> dict:
+    """One run: `train_settings` with the setup's own config alone. Returns its summary."""
+    return train_settings(setup, [(setup.config, run_dir)], progress, resume, **options)[0]
+
+
+def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], progress: bool = True,
+                   resume: bool = False, fault_injection: Callable | None = None, bar=None,
+                   stop: threading.Event | None = None, devices: list | None = None,
+                   trained: threading.Event | None = None, tensorboard: bool = False) -> list[dict]:
+    """Run the cycles of every (config, run directory) in `settings` as one program (continuing each
+    run's latest checkpoint with `resume`), writing each run's files and checkpoints into its directory.
+    The configs differ from `setup.config` only in their numeric hyperparameters (config.LEAF_FIELDS),
+    which the cycle takes as leaves (learn/online.Cycle): each run's numbers are those it gets alone.
+
+    `fault_injection(cycle, learners) -> learners` lets tests corrupt the state before a cycle (slot
+    i of the leading axis: setting i // num_seeds, seed i % num_seeds). `bar`: a progress bar shared
+    with other runs (else its own). `stop`: when set (by another thread), checkpoint the last completed
+    cycle and raise Interrupted; `trained` is set after each completed cycle. `devices`: the slot axis
+    is sharded over them (default: the first local device); the numbers do not depend on them, and a
+    run may resume on others. `tensorboard`: also log each cycle to event files (run/tensorboard.py).
+    Returns each run's summary, in order."""
+    start, config, primary = time.perf_counter(), setup.config, is_primary()  # only process 0 writes files
+    configs, run_dirs = [c for c, _ in settings], [d for _, d in settings]
+    seeds_per_run = config.num_seeds
     if resume:
-        check_checkpoint_belongs(config, run_dir)
-    seeds = SeedMesh(config.num_seeds, tuple(devices or jax.local_devices()[:1]), config.seed_block)
-    learners = setup.init_learners()
-    history: list[CycleMetrics] = []
+        for c, run_dir in settings:
+            check_checkpoint_belongs(c, run_dir)
+    slots = SeedMesh(len(settings) * seeds_per_run, tuple(devices or jax.local_devices()[:1]), config.seed_block)
+    fresh = setup.init_learners()
+    histories: list[list[CycleMetrics]] = [[] for _ in settings]
     elapsed_before = 0.0
     if resume:
-        learners, record, _ = checkpoint.restore(run_dir / "checkpoints", learners)
-        history, elapsed_before = _history(record), float(record["elapsed_s"])
+        step = common_step(run_dirs)
+        for run_dir in run_dirs:
+            checkpoint.discard_after(run_dir / "checkpoints", step)
+        restored = [checkpoint.restore(d / "checkpoints", fresh, step) for d in run_dirs]
+        learners = _concat([state for state, _, _ in restored])
+        histories = [_history(record) for _, record, _ in restored]
+        elapsed_before = max(float(record["elapsed_s"]) for _, record, _ in restored)
     else:
-        write_atomic(run_dir / "config.json", json.dumps(config.to_dict(), indent=2) + "\n")
-    cycle = Cycle(setup, seeds)
-    learners = seeds.place(learners)  # checkpoints hold the unpadded state on one device
-    last_saved = len(history)
+        learners = _concat([fresh] * len(settings))
+        for c, run_dir in settings if primary else ():
+            write_atomic(run_dir / "config.json", json.dumps(c.to_dict(), indent=2) + "\n")
+    cycle = Cycle(setup, slots, configs)
+    learners = slots.place(learners)  # checkpoints hold each run's unpadded state on one device
+    last_saved = len(histories[0])
     elapsed = lambda: elapsed_before + time.perf_counter() - start
+    of_run = lambda tree, i: jax.tree.map(lambda x: x[i * seeds_per_run:(i + 1) * seeds_per_run], tree)
 
-    def save(learners, history) -> None:
+    def save(learners, histories) -> None:
         nonlocal last_saved
-        checkpoint.save(run_dir / "checkpoints", len(history), seeds.unpad(learners),
-                        _record(config, history, elapsed()))
-        last_saved = len(history)
+        state = slots.unpad(learners)
+        for i, (c, run_dir) in enumerate(settings if primary else ()):
+            checkpoint.save(run_dir / "checkpoints", len(histories[i]), of_run(state, i),
+                            _record(c, histories[i], elapsed()))
+        last_saved = len(histories[0])
 
-    # (learners, history) after the last completed cycle, replaced in one assignment so that Ctrl-C at
+    # (learners, histories) after the last completed cycle, replaced in one assignment so that Ctrl-C at
     # any point finds a consistent pair to checkpoint.
-    done, unwritable = (learners, history), False
-    events = CycleEvents(run_dir, config.to_dict()) if tensorboard else None
+    done, unwritable = (learners, histories), False
+    events = [CycleEvents(d, c.to_dict()) for c, d in settings] if tensorboard and primary else []
     own_bar = bar is None
     if own_bar:
-        bar = cycle_progress(config.cycles, f"{config.env} x{config.num_seeds} seeds", progress, len(history))
+        what = f"{len(settings)} settings x " if len(settings) > 1 else ""
+        bar = cycle_progress(config.cycles, f"{config.env} {what}x{config.num_seeds} seeds", progress and primary,
+                             last_saved)
     else:
-        bar.update(len(history))
+        bar.update(last_saved)
     try:
-        for c in range(len(history) + 1, config.cycles + 1):
+        for c in range(last_saved + 1, config.cycles + 1):
             if stop is not None and stop.is_set():
                 raise KeyboardInterrupt
             learners = done[0] if fault_injection is None else fault_injection(c, done[0])
             updated, metrics = cycle(learners)
-            metrics = jax.tree.map(lambda x: np.asarray(x)[: config.num_seeds], metrics)  # drop padding
-            message = _fault(metrics, c, config.seeds, last_saved)
-            if message:
-                raise NumericalFault(message)
-            done = (updated, [*done[1], metrics])
+            metrics = jax.tree.map(np.asarray, slots.unpad(metrics))  # drop padding; gathered from every process
+            per_run = [of_run(metrics, i) for i in range(len(settings))]
+            for i, m in enumerate(per_run):
+                message = _fault(m, c, config.seeds, last_saved)
+                if message:
+                    raise NumericalFault(message + (f" ({run_dirs[i].name})" if len(settings) > 1 else ""))
+            done = (updated, [[*h, m] for h, m in zip(done[1], per_run)])
             if trained is not None:
                 trained.set()
-            if events is not None:
-                events.cycle(c, metrics)
+            for log, m in zip(events, per_run):
+                log.cycle(c, m)
             shown = {} if own_bar else {"last": f"{config.approach} {c}"}
             bar.set_postfix(**shown, test=f"{metrics.test_solve_rate.mean():.2f}",
                             train=f"{metrics.train_success_rate.mean():.2f}", eps=f"{metrics.epsilon.mean():.2f}")
@@ -152,21 +180,38 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
             if c % config.checkpoint_every == 0 or c == config.cycles:
                 save(*done)
     except KeyboardInterrupt:
-        if len(done[1]) > last_saved:
+        if len(done[1][0]) > last_saved:
             save(*done)
-        raise Interrupted(len(done[1])) from None
+        raise Interrupted(len(done[1][0])) from None
     except WriteError:
         unwritable = True
         raise
     finally:
         if own_bar:
             bar.close()
-        if events is not None:
-            events.close()
-        info = artifacts.summary(done[1], config.seeds, elapsed(), describe(seeds.devices)) if done[1] else None
-        if info and not unwritable:  # the files always describe the cycles completed so far
-            artifacts.write_run_files(run_dir, config.to_dict(), done[1], info, label=setup.approach.label)
-    return info
+        for log in events:
+            log.close()
+        infos = [artifacts.summary(h, config.seeds, elapsed(), describe(slots.devices)) if h else None
+                 for h in done[1]]
+        if primary and not unwritable:  # the files always describe the cycles completed so far
+            for c, run_dir, history, info in zip(configs, run_dirs, done[1], infos):
+                if info:
+                    artifacts.write_run_files(run_dir, c.to_dict(), history, info, label=setup.approach.label)
+    return infos
+
+
+def _concat(states: list):
+    return states[0] if len(states) == 1 else jax.tree.map(lambda *x: jax.numpy.concatenate(x), *states)
+
+
+def common_step(run_dirs: list[Path]) -> int:
+    """The latest cycle every run checkpointed (runs trained together save together; a crash between
+    their saves leaves the others one step ahead, which they then repeat exactly)."""
+    shared = set.intersection(*(set(checkpoint.sealed_steps(d / "checkpoints")) for d in run_dirs))
+    if not shared:
+        raise checkpoint.CheckpointError(f"{', '.join(str(d) for d in run_dirs)}: no checkpoint of the same "
+                                         f"cycle in every run trained together")
+    return max(shared)
 
 
 def load_learners(run_dir: Path) -> tuple[Setup, object, int]:
