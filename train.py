@@ -32,8 +32,8 @@ from jaxbridge.commands import train as command
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import PRESETS
 from jaxbridge.learn.approaches import APPROACHES
-from jaxbridge.learn.devices import device_count_arg, select_devices
-from jaxbridge.utils import compile_cache
+from jaxbridge.learn.devices import configure_cpu_devices, device_count_arg, select_devices
+from jaxbridge.utils import compile_cache, distributed
 from jaxbridge.utils.cli import ArgumentParser, UsageError, non_negative_int, positive_float, positive_int, run_main
 
 DEFAULTS = TrainConfig()
@@ -87,6 +87,14 @@ def parse_args(argv):
                         f"{d.call_planner_bonus}, doorknobs 0.5; see docs/RESULTS.md)")
     p.add_argument("--checkpoint-every", type=positive_int,
                    help=f"save the learner state every N cycles and at the end (default: {d.checkpoint_every})")
+    p.add_argument("--sweep", action="append", default=None, metavar="KEY=V1,V2,...",
+                   help="train every approach at each of these values of a hyperparameter (repeat for a grid: "
+                        "the cartesian product), each setting its own run directory approach@KEY=V,... with a row "
+                        "in results.md and a line in curves.png. Settings that differ only in learning_rate, "
+                        "gamma, grad_clip, call_planner_bonus or the epsilon schedule share one compiled program "
+                        "(as leaves, seeds x settings side by side); other keys (n_sample, hidden_sizes as 64x64, "
+                        "updates_per_cycle, polyak_tau, ...) compile one per value. Each run's numbers are those "
+                        "of a plain run with its setting (default: none)")
     p.add_argument("--out", type=Path, default=Path("runs"), help="parent of run directories (default: %(default)s)")
     p.add_argument("--name", default=None, help="experiment directory name under --out (default: the env name)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing experiment directory of the same name")
@@ -118,13 +126,16 @@ def parse_args(argv):
                         "training solve rates, the loss, epsilon, buffer size, and the config as text "
                         "(tensorboard --logdir RUN); metrics.csv stays the source of truth (default: off)")
     p.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
+    distributed.add_flags(p)
     return p.parse_args(argv)
 
 
 def main(argv=None) -> int:
     args = parse_args(argv)
     try:
-        devices = select_devices(args.devices)  # before anything starts JAX (CPU device count)
+        configure_cpu_devices(args.devices)  # before anything starts JAX
+        distributed.initialize_from(args)
+        devices = select_devices(args.devices)
     except ValueError as err:
         raise UsageError(str(err)) from None
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles

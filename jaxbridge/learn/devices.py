@@ -43,16 +43,29 @@ def _backend_started() -> bool:
         return True  # cannot tell: do not touch the config
 
 
+def configure_cpu_devices(request: str | int = "auto") -> None:
+    """On CPU, the virtual device count (`auto`: one per core), if the backend has not started yet and
+    XLA_FLAGS does not set it; nothing otherwise."""
+    if not _backend_started() and CPU_FLAG not in os.environ.get("XLA_FLAGS", ""):
+        jax.config.update("jax_num_cpu_devices", cpu_cores() if request == "auto" else int(request))
+
+
 def select_devices(request: str | int = "auto") -> list:
     """The local devices to shard the seeds over: `auto` = all of them, else the first `request`.
 
     On CPU, JAX has one device unless told otherwise before its backend starts: this sets
     `jax_num_cpu_devices` (auto: one per core) if the backend has not started yet and XLA_FLAGS does
     not already set --xla_force_host_platform_device_count. Other platforms (GPU, TPU) are unaffected.
-    Raises ValueError if fewer than `request` devices exist."""
-    if not _backend_started() and CPU_FLAG not in os.environ.get("XLA_FLAGS", ""):
-        jax.config.update("jax_num_cpu_devices", cpu_cores() if request == "auto" else int(request))
+    Raises ValueError if fewer than `request` devices exist. With several processes (utils/distributed.py)
+    every process's devices: `request` then counts each process's own."""
+    configure_cpu_devices(request)
     devices = jax.local_devices()
+    if jax.process_count() > 1:
+        per_process = len(devices) if request == "auto" else request
+        if per_process > len(devices):
+            raise ValueError(f"--devices {request}: process {jax.process_index()} has only {len(devices)} device(s)")
+        of = lambda p: sorted((d for d in jax.devices() if d.process_index == p), key=lambda d: d.id)
+        return [d for p in range(jax.process_count()) for d in of(p)[:per_process]]
     if request == "auto":
         return devices
     if request > len(devices):
@@ -81,6 +94,15 @@ def describe(devices) -> str:
     """E.g. "2 cpu"."""
     kinds = sorted({d.platform for d in devices})
     return f"{len(devices)} {'+'.join(kinds)}"
+
+
+def _is_key(x) -> bool:
+    return jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key)
+
+
+def _key_data(x):
+    """A PRNG key array's raw uint32 words (other arrays as they are): what crosses processes."""
+    return jax.random.key_data(x) if _is_key(x) else x
 
 
 @dataclass(frozen=True)
@@ -120,18 +142,40 @@ class SeedMesh:
             return tree
         return jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)]), tree)
 
+    @property
+    def spans_processes(self) -> bool:
+        return len({d.process_index for d in self.devices}) > 1
+
     def place(self, tree: Any) -> Any:
-        """Pad a per-seed pytree and shard its seed axis over the devices."""
-        return jax.device_put(self.pad(tree), self.sharding)
+        """Pad a per-seed pytree and shard its seed axis over the devices (across processes, each
+        process, holding the whole tree, hands over the slots of its own devices)."""
+        return self._put(self.pad(tree))
+
+    def _put(self, tree: Any) -> Any:
+        if not self.spans_processes:
+            return jax.device_put(tree, self.sharding)
+
+        def put(x):  # every process holds all of x; each hands over its own devices' slots
+            host = np.asarray(_key_data(x))
+            placed = jax.make_array_from_callback(host.shape, self.sharding, lambda index: host[index])
+            return jax.random.wrap_key_data(placed, impl=jax.random.key_impl(x)) if _is_key(x) else placed
+        return jax.tree.map(put, tree)
 
     def unpad(self, tree: Any) -> Any:
         """The real seeds of a placed pytree, on one device (the layout checkpoints use, whatever the
-        device count)."""
+        device count); across processes, gathered into every process's memory."""
+        if self.spans_processes:
+            from jax.experimental import multihost_utils
+
+            def gather(x):
+                host = np.asarray(multihost_utils.process_allgather(_key_data(x), tiled=True))[: self.num_seeds]
+                return jax.random.wrap_key_data(host, impl=jax.random.key_impl(x)) if _is_key(x) else host
+            return jax.tree.map(gather, tree)
         return jax.device_put(jax.tree.map(lambda x: x[: self.num_seeds], tree), jax.local_devices()[0])
 
     def real(self) -> jax.Array:
         """bool[padded], placed: which slots hold a real seed."""
-        return jax.device_put(np.arange(self.padded) < self.num_seeds, self.sharding)
+        return self._put(np.arange(self.padded) < self.num_seeds)
 
     def map_seeds(self, fn: Callable) -> Callable:
         """`fn(state, *inputs) -> (state, out)` for one seed, lifted to every seed: the returned

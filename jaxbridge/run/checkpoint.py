@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import jax
+import numpy as np
 import orbax.checkpoint as ocp
 from orbax.checkpoint import checkpoint_managers
 
@@ -33,8 +34,13 @@ class CheckpointError(Exception):
 def _manager(directory: Path) -> ocp.CheckpointManager:
     # Synchronous saves: a failure (no space, read-only) raises here, in the saving thread, at once, and
     # no background thread outlives it.
-    options = ocp.CheckpointManagerOptions(preservation_policy=checkpoint_managers.LatestN(n=KEEP), create=True,
-                                           enable_async_checkpointing=False)
+    # Across processes (utils/distributed.py) each process reads alone and process 0 alone writes, from
+    # states gathered on the host: no orbax barrier waits on the others.
+    alone = {} if jax.process_count() == 1 else {"multiprocessing_options": ocp.options.MultiprocessingOptions(
+        primary_host=jax.process_index(), active_processes={jax.process_index()})}
+    Path(directory).mkdir(parents=True, exist_ok=True)  # orbax's create=True refuses active_processes
+    options = ocp.CheckpointManagerOptions(preservation_policy=checkpoint_managers.LatestN(n=KEEP), create=False,
+                                           enable_async_checkpointing=False, **alone)
     return ocp.CheckpointManager(Path(directory).absolute(), options=options)
 
 
@@ -52,9 +58,15 @@ def _digests(step_dir: Path) -> dict[str, str]:
 _SAVING = threading.Lock()
 
 
+def _is_key(x) -> bool:
+    return jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key)
+
+
 def save(directory: Path, step: int, state: Any, record: dict) -> None:
     """Save and seal checkpoint `step`; WriteError (naming the directory) if the files cannot be written."""
     directory = Path(directory)
+    if jax.process_count() > 1:  # orbax takes only host arrays there; PRNG keys as their words (restore wraps them)
+        state = jax.tree.map(lambda x: np.asarray(jax.random.key_data(x) if _is_key(x) else x), state)
     with _SAVING, _quiet():
         try:
             _save(directory, step, state, record)
@@ -131,6 +143,15 @@ def sealed_steps(directory: Path) -> list[int]:
                   if p.is_dir() and p.name.isdigit() and _manifest_path(directory, int(p.name)).is_file())
 
 
+def discard_after(directory: Path, step: int) -> None:
+    """Delete the checkpoints after `step` (unsealed first): a run that resumes from `step` with others
+    trained together saves those steps again."""
+    directory = Path(directory)
+    for later in [s for s in sealed_steps(directory) if s > step]:
+        _manifest_path(directory, later).unlink()
+        shutil.rmtree(directory / str(later))
+
+
 def _read_manifest(directory: Path, step: int) -> dict[str, str]:
     path = _manifest_path(directory, step)
     try:
@@ -187,4 +208,6 @@ def restore(directory: Path, like: Any, step: int | None = None) -> tuple[Any, d
                                                                  record=ocp.args.JsonRestore()))
     except (ValueError, KeyError, TypeError) as err:  # shapes or structure of another config
         raise CheckpointError(f"checkpoint {directory / str(step)} does not fit this run: {err}") from None
-    return restored.state, restored.record, step
+    state = jax.tree.map(lambda r, t: jax.random.wrap_key_data(r, impl=jax.random.key_impl(t))
+                         if _is_key(t) and not _is_key(r) else r, restored.state, like)  # saved by several processes
+    return state, restored.record, step
