@@ -15,3 +15,9 @@ scale() { name=$1; shift; $py -m bench.scaling "$@" --json "$out/$name.json" 2>&
 scale scaling_lsd --env light_switch_door --seeds 8,64,256,1024 --cycles 3
 scale scaling_doorknobs --env doorknobs --seeds 8,64 --cycles 3
 scale scaling_lsd_block1 --env light_switch_door --seeds 8 --seed-block 1 --cycles 2
+# A sweep's settings are more slots of the same program: 4 learning-rate/epsilon settings x 64 seeds, blocks of 64.
+{ start=$(date +%s)
+  $py train.py --env light_switch_door --approaches ours --num-seeds 64 --seed-block 64 --cycles 3 --no-progress \
+      --sweep learning_rate=1e-3,3e-4 --sweep epsilon_decay=3.8e-5,1e-4 --out "$out/runs" --name sweep --overwrite
+  echo "sweep 4 settings x 64 seeds x 3 cycles: $(( $(date +%s) - start )) s"
+} 2>&1 | tee "$out/sweep.log"
