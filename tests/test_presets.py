@@ -94,6 +94,21 @@ def test_hidden_units_are_the_named_activation(activation, hidden):
     np.testing.assert_allclose(net.apply(params, x), expected, rtol=1e-5, atol=1e-6)
 
 
+@pytest.mark.parametrize("ensemble", [1, 2])
+def test_the_output_layer_starts_at_zero_or_uniform_as_pytorch(ensemble):
+    x = np.asarray(jax.random.normal(jax.random.key(0), (16, 9)))
+    zero = QNetwork((8, 8), ensemble, "relu", "zero")
+    uniform = QNetwork((8, 8), ensemble, "relu", "uniform")
+    assert not np.asarray(zero.apply(zero.init(jax.random.key(1), x), x)).any()
+    params = uniform.init(jax.random.key(1), x)
+    output = jax.tree.leaves(params["params"])[-2:]  # the last layer's bias and kernel: fan-in 8
+    values = np.concatenate([np.ravel(v) for v in output])
+    assert np.all(np.abs(values) <= 1 / np.sqrt(8)) and np.abs(values).max() > 0.5 / np.sqrt(8)
+    assert np.asarray(uniform.apply(params, x)).std() > 0
+    assert TrainConfig.for_env("coffee", "authors").output_init == "uniform" == make_config(
+        {"env": "coffee", "preset": "authors"})[0].output_init and TrainConfig().output_init == "zero"
+
+
 def test_the_target_starts_as_a_copy_or_apart():
     def learner(target_init):
         config = TrainConfig.for_env("light_switch_door", num_seeds=1, target_init=target_init)

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 # 2: `approach` (version 1 configs were all "ours" and still load); 3: `split_task_state` (older runs
 # stored whole observations and load with it off); 4: `preset`, `test_protocol`, `activation`,
 # `target_init`, `reset_optimizer`, `explore_ground_operators` (older runs were the jaxbridge preset,
-# which their defaults are)
-CONFIG_VERSION = 4
+# which their defaults are); 5: `output_init` (older runs started their output layer at zero)
+CONFIG_VERSION = 5
 
 
 # The numeric hyperparameters that change no shape or program: pytree leaves of the cycle
@@ -31,7 +31,7 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
 
 # The string options and what they may be.
 CHOICES = {"polyak_per": ("update", "decision"), "activation": ("leaky_relu", "relu"),
-           "target_init": ("copy", "apart")}
+           "target_init": ("copy", "apart"), "output_init": ("zero", "uniform")}
 
 
 @dataclass(frozen=True)
@@ -85,6 +85,10 @@ class TrainConfig:
     activation: str = "leaky_relu"
     """Hidden units: "leaky_relu" (slope 0.01, ours: keeps units alive under mostly-zero targets) or
     "relu" (the authors')."""
+    output_init: str = "zero"
+    """The Q-network's output layer at the start: "zero" (ours: the untrained Q is 0 everywhere) or
+    "uniform" as PyTorch's default nn.Linear, +-1/sqrt(fan_in) (the authors'; the hidden layers start
+    so in both)."""
     target_init: str = "copy"
     """The target network at the start: a "copy" of the online one (ours) or initialised "apart" from
     it (the authors'), then tracking it by polyak steps."""
@@ -148,7 +152,7 @@ class TrainConfig:
             data.setdefault("approach", "ours")
         if version in (1, 2):
             data.setdefault("split_task_state", False)
-        elif version not in (3, CONFIG_VERSION):
+        elif version not in (3, 4, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields

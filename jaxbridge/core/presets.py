@@ -8,8 +8,7 @@
 Departures the preset does not switch yet (docs/DESIGN.md, "Departures"): the authors' per-cycle
 min-max input/target normalisation, their fitting schedule (up to 100,000 iterations stopped after
 5,000 without a better minibatch loss, the best weights restored; the preset keeps our fixed updates
-per cycle), PyTorch's default initialisation of the output layer, and Coffee's repeated-state flag
-shared between two skills.
+per cycle) and Coffee's repeated-state flag shared between two skills.
 """
 from __future__ import annotations
 
@@ -26,6 +25,7 @@ AUTHORS = {
     "clip_bootstrap": False,  # no clipping of the bootstrapped value
     "q_ensemble": 1,  # one network
     "activation": "relu",  # plain ReLU hidden units
+    "output_init": "uniform",  # PyTorch's default init of the output layer too
     "target_init": "apart",  # the target initialised apart from the online network
     "reset_optimizer": True,  # a new Adam every cycle
     "explore_ground_operators": True,  # epsilon draws uniformly over the applicable ground operators

@@ -69,7 +69,7 @@ class DQN:
 
 
 def q_network(config: TrainConfig) -> QNetwork:
-    return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation)
+    return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init)
 
 
 def make_optimizer(hyper: Hyper | TrainConfig) -> optax.GradientTransformation:

@@ -103,19 +103,23 @@ LEAKY_SLOPE = 0.01
 ACTIVATIONS = {"leaky_relu": lambda x: nn.leaky_relu(x, LEAKY_SLOPE), "relu": nn.relu}
 
 
-def _mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int], activation: str) -> jax.Array:
+OUTPUT_SCALES = {"zero": 0.0, "uniform": 1.0}  # TrainConfig.output_init -> the output layer's init bound
+
+
+def _mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int], activation: str, output_init: str) -> jax.Array:
     for size in hidden_sizes:
         x = ACTIVATIONS[activation](UniformDense(size)(x))
-    return UniformDense(1, scale=0.0)(x)[..., 0]
+    return UniformDense(1, scale=OUTPUT_SCALES[output_init])(x)[..., 0]
 
 
 class _Member(nn.Module):
     hidden_sizes: Sequence[int]
     activation: str
+    output_init: str
 
     @nn.compact
     def __call__(self, carry: None, x: jax.Array | SplitInput) -> tuple[None, jax.Array]:
-        return carry, _mlp(x, self.hidden_sizes, self.activation)
+        return carry, _mlp(x, self.hidden_sizes, self.activation, self.output_init)
 
 
 class QNetwork(nn.Module):
@@ -123,27 +127,29 @@ class QNetwork(nn.Module):
     value is their minimum (clipped double Q).
 
     Departures from the authors' ReLU network (docs/DESIGN.md, Learning): the leaky slope keeps units
-    alive under mostly-zero targets, the output layer starts at zero (so the untrained Q is 0, as theirs),
+    alive under mostly-zero targets, the output layer starts at zero (so the untrained Q is 0; theirs
+    starts uniform as PyTorch's default, `output_init`),
     and with `ensemble` > 1 members fitted to the same targets give their minimum, in the argmax and the
     targets alike, so the argmax over sampled parameters does not pick one member's upward error."""
 
     hidden_sizes: Sequence[int] = (32, 32)
     ensemble: int = 1
     activation: str = "leaky_relu"  # of the hidden units: ACTIVATIONS
+    output_init: str = "zero"  # the output layer's initialisation: OUTPUT_SCALES
 
     @nn.compact
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
         """Q of x[..., input] (or of a SplitInput): [...], or every member's, [ensemble, ...], with
         `members`."""
         if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
-            q = _mlp(x, self.hidden_sizes, self.activation)[None]
+            q = _mlp(x, self.hidden_sizes, self.activation, self.output_init)[None]
         else:
             # Members one after another (a scan over their stacked parameters), not vmapped: a member
             # axis inside the per-seed program made XLA compile the gradient differently with the
             # number of devices (docs/RELIABILITY.md); each member alone compiles as the plain network.
             members_scan = nn.scan(_Member, variable_axes={"params": 0}, split_rngs={"params": True},
                                    in_axes=nn.broadcast, length=self.ensemble)
-            _, q = members_scan(self.hidden_sizes, self.activation)(None, x)
+            _, q = members_scan(self.hidden_sizes, self.activation, self.output_init)(None, x)
         return q if members else jnp.min(q, axis=0)
 
 
