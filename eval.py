@@ -31,9 +31,10 @@ def parse_args(argv):
     parser.add_argument("runs", nargs="*", type=Path, metavar="RUN",
                         help="an experiment directory written by train.py (or one approach's run directory in "
                              "it): evaluate the latest checkpoint greedily; two RUNs: side by side")
-    parser.add_argument("--approach", choices=list(APPROACHES), default=None,
-                        help="with experiment directories: which approach's run to evaluate (default: ours; "
-                             "--sweep without it takes every approach of the experiment)")
+    parser.add_argument("--approach", default=None, metavar="NAME",
+                        help=f"with experiment directories: which run to evaluate: an approach ({', '.join(APPROACHES)}) "
+                             "or, in a train.py --sweep experiment, approach@setting as its directory is named "
+                             "(default: ours; --sweep without it takes every run of the experiment)")
     parser.add_argument("--sweep", choices=["novelties"], default=None,
                         help="novelties: evaluate on tasks with 1, 2, ... novelty instances (see above) and "
                              "plot solve rate against their number")

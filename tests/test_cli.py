@@ -153,6 +153,7 @@ def test_eval_animates_the_episode_to_a_gif(short_run, eval_main, capsys, tmp_pa
     (["RUN", "--sweep", "novelties", "--gif", "e.gif"], "does not combine with --render/--gif"),
     (["RUN", "RUN", "--render", "e.png"], "draw an episode of one run; give one RUN"),
     (["RUN", "--sweep", "novelties", "--approach", "random"], "holds no random run (it holds: ours, pure_planning)"),
+    (["RUN", "--approach", "../ours"], "a run name inside the experiment directory, not a path"),
 ])
 def test_eval_rejects_bad_combinations_in_one_line(short_run, eval_main, capsys, argv, message):
     from jaxbridge.utils.cli import run_main

@@ -107,6 +107,11 @@ def test_each_setting_equals_a_plain_run_with_it_byte_for_byte(swept, tmp_path):
     assert (tmp_path / "config.json").read_text() == (slot / "config.json").read_text()
 
 
+def test_eval_picks_a_setting_of_a_sweep(swept, eval_main, capsys):
+    assert eval_main([str(swept), "--approach", "ours@learning_rate=0.0003,epsilon_decay=0.001"]) == 0
+    assert "ours@learning_rate=0.0003,epsilon_decay=0.001" in capsys.readouterr().out
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("localhost", 0))

@@ -74,7 +74,10 @@ def render(args, batch, bridge, bridge_params, controls, result, label: str) -> 
 
 
 def run_directory(path: Path, approach: str | None) -> Path:
-    """The run to evaluate: `path` itself, or its approach's run inside an experiment directory."""
+    """The run to evaluate: `path` itself, or its approach's run (approach@setting in a sweep) inside an
+    experiment directory."""
+    if approach is not None and (Path(approach).name != approach or approach.startswith(".")):
+        raise UsageError(f"--approach {approach!r}: a run name inside the experiment directory, not a path")
     if (path / "experiment.json").is_file():
         chosen = path / (approach or "ours")
         if not (chosen / "config.json").is_file():
