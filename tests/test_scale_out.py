@@ -1,7 +1,7 @@
 """Past one program and one process: hyperparameter sweeps in one run (`train.py --sweep`: the grid, its
-refusals, one program for the leaf hyperparameters, each setting equal to a plain run, an exact resume)
-and the same run over two processes on localhost (jax.distributed), equal to one process and resuming
-exactly, also when one setting saved a cycle more than the others."""
+refusals, one program for the leaf hyperparameters, each setting equal to a plain run) and its exact
+continuation on two processes on localhost (jax.distributed), also when one setting saved more cycles
+than the others."""
 import csv
 import dataclasses
 import shutil
@@ -15,12 +15,13 @@ import pytest
 from jaxbridge.core import grid
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
+from jaxbridge.run import checkpoint
 from jaxbridge.run.runner import train
 
 ROOT = Path(__file__).resolve().parents[1]
 SWEEP = ["--sweep", "learning_rate=1e-3,3e-4", "--sweep", "epsilon_decay=3.8e-5,1e-3"]
-SMALL = ["--env", "light_switch_door", "--approaches", "ours", "--num-seeds", "4", "--cycles", "3",
-         "--updates-per-cycle", "30", "--checkpoint-every", "1", "--no-progress"]
+SMALL = ["--env", "light_switch_door", "--approaches", "ours", "--num-seeds", "4", "--cycles", "4",
+         "--updates-per-cycle", "30", "--checkpoint-every", "2", "--no-progress"]
 
 
 def cli(*args):
@@ -99,8 +100,8 @@ def test_a_two_by_two_sweep_writes_a_run_and_a_row_per_setting(swept):
 
 
 def test_each_setting_equals_a_plain_run_with_it_byte_for_byte(swept, tmp_path):
-    config = TrainConfig.for_env("light_switch_door", num_seeds=4, cycles=3, updates_per_cycle=30,
-                                 checkpoint_every=1, learning_rate=3e-4, epsilon_decay=1e-3)
+    config = TrainConfig.for_env("light_switch_door", num_seeds=4, cycles=4, updates_per_cycle=30,
+                                 checkpoint_every=2, learning_rate=3e-4, epsilon_decay=1e-3)
     train(make_setup(config), tmp_path, progress=False)
     slot = swept / "ours@learning_rate=0.0003,epsilon_decay=0.001"
     assert (tmp_path / "metrics.csv").read_text() == (slot / "metrics.csv").read_text()
@@ -126,31 +127,24 @@ def two_processes(*args) -> list[subprocess.CompletedProcess]:
     return [subprocess.CompletedProcess(p.args, p.wait(timeout=600), *p.communicate()) for p in procs]
 
 
-@pytest.fixture(scope="module")
-def two_process_sweep(tmp_path_factory):
-    out = tmp_path_factory.mktemp("hosts")
-    for proc in two_processes(*SMALL, *SWEEP, "--out", str(out), "--name", "grid"):
-        assert proc.returncode == 0, proc.stderr[-3000:]
-    return out / "grid"
-
-
-def test_two_processes_give_one_process_numbers_and_only_process_0_writes(swept, two_process_sweep):
-    for run in sorted(p for p in swept.iterdir() if p.is_dir()):
-        assert (two_process_sweep / run.name / "metrics.csv").read_text() == (run / "metrics.csv").read_text()
-    assert (two_process_sweep / "results.md").read_text() == (swept / "results.md").read_text()
-
-
-def test_two_processes_resume_a_sweep_exactly_from_the_cycle_every_setting_saved(two_process_sweep, tmp_path):
+def test_two_processes_resume_a_one_process_sweep_to_its_numbers(swept, tmp_path):
+    """Stopped after cycle 2 (one setting after cycle 4: settings save one after another), the sweep
+    continues on 2 processes: every process restores, the cycles run across both, process 0 writes, and
+    the files equal the uninterrupted one-process run's byte for byte."""
     copy = tmp_path / "grid"
-    shutil.copytree(two_process_sweep, copy)
+    shutil.copytree(swept, copy)
     runs = sorted(p for p in copy.iterdir() if p.is_dir())
-    # As if stopped between the settings' saves of cycle 3: one run holds it, the others stop at 2.
-    for run in runs[1:]:
-        (run / "checkpoints" / "3.sha256.json").unlink()
-        shutil.rmtree(run / "checkpoints" / "3")
+    for run in runs[1:]:  # checkpoints of cycles 2 and 4 (every 2): keep 2
+        (run / "checkpoints" / "4.sha256.json").unlink()
+        shutil.rmtree(run / "checkpoints" / "4")
         (run / "metrics.csv").unlink()
+    saved = {run.name: (run / "checkpoints" / "2.sha256.json").stat().st_mtime_ns for run in runs}
     outputs = two_processes("--resume", str(copy), "--no-progress")
     assert [p.returncode for p in outputs] == [0, 0], outputs[0].stderr[-3000:] + outputs[1].stderr[-3000:]
     assert "done in" in outputs[0].stdout and "done in" not in outputs[1].stdout  # process 0 reports
     for run in runs:
-        assert (run / "metrics.csv").read_text() == (two_process_sweep / run.name / "metrics.csv").read_text()
+        assert (run / "metrics.csv").read_text() == (swept / run.name / "metrics.csv").read_text()
+    assert (copy / "results.md").read_text() == (swept / "results.md").read_text()
+    # Continued, not started over: cycle 2's checkpoints are the ones from before, cycle 4's new.
+    assert all((run / "checkpoints" / "2.sha256.json").stat().st_mtime_ns == saved[run.name] for run in runs)
+    assert all(checkpoint.sealed_steps(run / "checkpoints") == [2, 4] for run in runs)
