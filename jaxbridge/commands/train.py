@@ -1,6 +1,7 @@
 """train.py's work once its flags are parsed: the config, the experiment directory, new or resumed runs."""
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 import time
@@ -74,8 +75,6 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
                    interrupts=None, tensorboard: bool = False) -> tuple[Path, Callable[[], dict]]:
     """(experiment directory, the training to run) of a new experiment; the directory is locked. A run
     whose memory estimate exceeds `max_memory` GiB (default: what is available) is refused first."""
-    import dataclasses
-
     from jaxbridge.learn.devices import default_workers
     from jaxbridge.run import memory, rundir
 

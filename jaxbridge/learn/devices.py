@@ -18,6 +18,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
+from jaxbridge.utils.distributed import multi_process
+
 AXIS = "seeds"
 CPU_FLAG = "xla_force_host_platform_device_count"
 
@@ -60,7 +62,7 @@ def select_devices(request: str | int = "auto") -> list:
     every process's devices: `request` then counts each process's own."""
     configure_cpu_devices(request)
     devices = jax.local_devices()
-    if jax.process_count() > 1:
+    if multi_process():
         per_process = len(devices) if request == "auto" else request
         if per_process > len(devices):
             raise ValueError(f"--devices {request}: process {jax.process_index()} has only {len(devices)} device(s)")
@@ -96,13 +98,13 @@ def describe(devices) -> str:
     return f"{len(devices)} {'+'.join(kinds)}"
 
 
-def _is_key(x) -> bool:
+def is_prng_key(x) -> bool:
     return jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key)
 
 
 def _key_data(x):
     """A PRNG key array's raw uint32 words (other arrays as they are): what crosses processes."""
-    return jax.random.key_data(x) if _is_key(x) else x
+    return jax.random.key_data(x) if is_prng_key(x) else x
 
 
 @dataclass(frozen=True)
@@ -158,7 +160,7 @@ class SeedMesh:
         def put(x):  # every process holds all of x; each hands over its own devices' slots
             host = np.asarray(_key_data(x))
             placed = jax.make_array_from_callback(host.shape, self.sharding, lambda index: host[index])
-            return jax.random.wrap_key_data(placed, impl=jax.random.key_impl(x)) if _is_key(x) else placed
+            return jax.random.wrap_key_data(placed, impl=jax.random.key_impl(x)) if is_prng_key(x) else placed
         return jax.tree.map(put, tree)
 
     def unpad(self, tree: Any) -> Any:
@@ -169,7 +171,7 @@ class SeedMesh:
 
             def gather(x):
                 host = np.asarray(multihost_utils.process_allgather(_key_data(x), tiled=True))[: self.num_seeds]
-                return jax.random.wrap_key_data(host, impl=jax.random.key_impl(x)) if _is_key(x) else host
+                return jax.random.wrap_key_data(host, impl=jax.random.key_impl(x)) if is_prng_key(x) else host
             return jax.tree.map(gather, tree)
         return jax.device_put(jax.tree.map(lambda x: x[: self.num_seeds], tree), jax.local_devices()[0])
 

@@ -139,7 +139,7 @@ def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key
     if config.clip_bootstrap:
         next_q = jnp.clip(next_q, 0.0, 1.0 + hyper.call_planner_bonus)
     # gamma inside the select: a traced gamma's product next to the sum is fused into a multiply-add,
-    # a constant's is not (learn/hyper.py); this way both round the product first.
+    # a constant's is not (docs/DESIGN.md, "Hyperparameters as leaves"); this way both round it first.
     return batch.reward + jnp.where(batch.done, 0.0, hyper.gamma * next_q)
 
 

@@ -22,6 +22,8 @@ import numpy as np
 import orbax.checkpoint as ocp
 from orbax.checkpoint import checkpoint_managers
 
+from jaxbridge.learn.devices import is_prng_key
+from jaxbridge.utils.distributed import multi_process
 from jaxbridge.utils.files import WriteError, write_atomic
 
 KEEP = 2
@@ -36,11 +38,11 @@ def _manager(directory: Path) -> ocp.CheckpointManager:
     # no background thread outlives it.
     # Across processes (utils/distributed.py) each process reads alone and process 0 alone writes, from
     # states gathered on the host: no orbax barrier waits on the others.
-    alone = {} if jax.process_count() == 1 else {"multiprocessing_options": ocp.options.MultiprocessingOptions(
-        primary_host=jax.process_index(), active_processes={jax.process_index()})}
-    Path(directory).mkdir(parents=True, exist_ok=True)  # orbax's create=True refuses active_processes
-    options = ocp.CheckpointManagerOptions(preservation_policy=checkpoint_managers.LatestN(n=KEEP), create=False,
-                                           enable_async_checkpointing=False, **alone)
+    alone = {"multiprocessing_options": ocp.options.MultiprocessingOptions(
+        primary_host=jax.process_index(), active_processes={jax.process_index()})} if multi_process() else {}
+    # orbax's create=True refuses active_processes: across processes _save makes the directory
+    options = ocp.CheckpointManagerOptions(preservation_policy=checkpoint_managers.LatestN(n=KEEP),
+                                           create=not alone, enable_async_checkpointing=False, **alone)
     return ocp.CheckpointManager(Path(directory).absolute(), options=options)
 
 
@@ -58,15 +60,11 @@ def _digests(step_dir: Path) -> dict[str, str]:
 _SAVING = threading.Lock()
 
 
-def _is_key(x) -> bool:
-    return jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key)
-
-
 def save(directory: Path, step: int, state: Any, record: dict) -> None:
     """Save and seal checkpoint `step`; WriteError (naming the directory) if the files cannot be written."""
     directory = Path(directory)
-    if jax.process_count() > 1:  # orbax takes only host arrays there; PRNG keys as their words (restore wraps them)
-        state = jax.tree.map(lambda x: np.asarray(jax.random.key_data(x) if _is_key(x) else x), state)
+    if multi_process():  # orbax takes only host arrays there; PRNG keys as their words (restore wraps them)
+        state = jax.tree.map(lambda x: np.asarray(jax.random.key_data(x) if is_prng_key(x) else x), state)
     with _SAVING, _quiet():
         try:
             _save(directory, step, state, record)
@@ -113,6 +111,8 @@ def _write_failure(err: Exception) -> str | None:
 
 
 def _save(directory: Path, step: int, state: Any, record: dict) -> None:
+    if multi_process():
+        directory.mkdir(parents=True, exist_ok=True)  # the manager does not, across processes
     unsealed = directory / str(step)
     if unsealed.exists() and not _manifest_path(directory, step).is_file():
         shutil.rmtree(unsealed)  # a save of this step that never completed: orbax would keep its files
@@ -209,5 +209,5 @@ def restore(directory: Path, like: Any, step: int | None = None) -> tuple[Any, d
     except (ValueError, KeyError, TypeError) as err:  # shapes or structure of another config
         raise CheckpointError(f"checkpoint {directory / str(step)} does not fit this run: {err}") from None
     state = jax.tree.map(lambda r, t: jax.random.wrap_key_data(r, impl=jax.random.key_impl(t))
-                         if _is_key(t) and not _is_key(r) else r, restored.state, like)  # saved by several processes
+                         if is_prng_key(t) and not is_prng_key(r) else r, restored.state, like)  # saved by several processes
     return state, restored.record, step

@@ -109,7 +109,7 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         if stop.is_set():  # interrupted before this program's turn
             raise Interrupted(0)
         run_dirs = [experiment_dir / name for name in program]
-        started = all((d / "checkpoints").is_dir() and checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
+        started = all(checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
         if not started and primary:
             for run_dir in run_dirs:
                 rundir.fresh(run_dir)
@@ -155,4 +155,3 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         done = [n for n in names if (experiment_dir / n / "metrics.csv").is_file()]
         if done and primary and not unwritable:
             comparison.write_comparison(experiment_dir, config.env, comparison.run_labels(done))
-
