@@ -37,7 +37,7 @@ def main() -> None:
     print(f"final greedy test solve rate per seed: {success.reshape(config.num_seeds, -1).mean(1).tolist()}")
     for s in range(config.num_seeds):
         failed = [i for i in range(s * config.num_test_tasks, (s + 1) * config.num_test_tasks) if not success[i]]
-        params = jax.tree.map(lambda x, s=s: x[s], learners.params)
+        params = jax.tree.map(lambda x, s=s: x[s], learners.online)
         for i in failed[: args.max_failed]:
             steps = np.flatnonzero(decided[:, i])
             cups = f" ({len(test.specs[i].cups)} cups)" if hasattr(test.specs[i], "cups") else ""

@@ -12,6 +12,7 @@ drawn from the skill's sampler: uniform in [param_low, param_high] (equal bounds
 from __future__ import annotations
 
 import abc
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, Callable, ClassVar, Hashable, Protocol
 
@@ -135,6 +136,9 @@ class NoveltyEnv(abc.ABC):
     # Training hyperparameters of the authors' code where this env's differ from the common ones
     # (jaxbridge/core/presets.py, `train.py --preset authors`).
     authors_defaults: ClassVar[dict] = {}
+    # Behaviours of the authors' env that this one departs from but can switch back on (name -> what it
+    # does); each is a bool field of the env's dataclass, off by default (`with_quirks`).
+    quirks: ClassVar[dict[str, str]] = {}
 
     # ---- host: tasks and the planner's model -------------------------------------------------------
     @staticmethod
@@ -243,7 +247,25 @@ class NoveltyEnv(abc.ABC):
         checked by the planner model; envs whose skills need more (a motion plan) override this."""
         return jnp.ones(jnp.broadcast_shapes(skill.shape, slot.shape), bool)
 
+    def with_quirks(self, names) -> "NoveltyEnv":
+        """This env with the named `quirks` switched on; ValueError for a name it does not have."""
+        unknown = [n for n in names if n not in self.quirks]
+        if unknown:
+            known = ", ".join(self.quirks) or "none"
+            raise ValueError(f"env {self.name!r} has no quirk {unknown[0]!r} (its quirks: {known})")
+        return dataclasses.replace(self, **{n: True for n in names}) if names else self
+
     # ---- optional hooks ----------------------------------------------------------------------------
+    def after_skill_step(self, state: Any, next_state: Any, call: SkillCall) -> Any:
+        """`next_state` after the running skill's policy acted in `state` (not called on CallPlanner's
+        no-op): where an env remembers something about its skills' calls. Default: nothing."""
+        return next_state
+
+    def share_between_episodes(self, states: Any, groups: jax.Array) -> Any:
+        """A batch of states after a step, where episodes of the same group (int[B]: one seed's concurrent
+        episodes) share something outside any one episode. Default: nothing is shared."""
+        return states
+
     def oracle_bridge(self, params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
         """A hand-written bridge that fixes the novelty (tests, `eval.py --bridge oracle`); optional."""
         raise NotImplementedError(f"env {self.name!r} has no oracle bridge")

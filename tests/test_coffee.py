@@ -1,6 +1,8 @@
 """Coffee: every dynamics branch of envs.md §4.4 and their priority, the predicates, each skill reaching
 its operator's effects, pouring into several cups, task generation, features, jit/vmap, and the
-meta-policy with the oracle bridge and with pure planning."""
+meta-policy with the oracle bridge and with pure planning, and the authors' shared repeated-state flag."""
+from dataclasses import dataclass
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -11,6 +13,7 @@ from envs_jax.coffee import world
 from envs_jax.base import SkillCall
 from envs_jax.coffee.env import CUP_ATOMS, SINGLE_ATOMS, Coffee
 from envs_jax.coffee.world import CoffeeTask
+from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import make_batch
 from planner.strips import ground
 
@@ -360,3 +363,58 @@ def test_the_env_keeps_the_env_contract():
     from jaxbridge import check_env
 
     assert check_env(Coffee) is Coffee  # shapes, dtypes, purity, the planner's model, the oracle on its test tasks
+
+
+# ---- the authors' shared repeated-state flag (quirk "shared_repeat_flag", envs.md §4.6) ---------------
+@dataclass(frozen=True)
+class HesitantOracle:
+    """The oracle, except that where it would move to the jug's top it first tries PickJug on a coin flip."""
+
+    env: Coffee
+
+    def __call__(self, params, obs, key):
+        oracle = self.env.oracle_bridge(params, obs, key)
+        pick = (oracle.skill == skills.MOVE_TO_TWIST_JUG) & jax.random.bernoulli(key)
+        return oracle.replace(skill=jnp.where(pick, skills.PICK_JUG, oracle.skill))
+
+
+@pytest.fixture(scope="module")
+def training_batch():
+    return make_batch(Coffee, [Coffee.train_task(s) for s in range(8)], list(range(8)), [Coffee.train_steps] * 8)
+
+
+def hesitant_rollout(batch, quirk: bool, groups):
+    env = batch.env.with_quirks(("shared_repeat_flag",) if quirk else ())
+    result, rec = rollout(env, HesitantOracle(env), None, batch.arrays, jax.random.split(jax.random.key(1), batch.size),
+                          batch.max_steps, record=True, groups=groups)
+    decided = np.asarray(rec.decided & rec.live)
+    first = np.array([np.asarray(rec.skill)[decided[:, i], i][0] for i in range(batch.size)])
+    return jax.tree.map(np.asarray, result), first == skills.PICK_JUG, np.asarray(rec.env_state.memory.repeated[-1])
+
+
+def test_pick_jug_at_the_stuck_state_sets_the_authors_flag_which_fails_the_planners_pick_later(training_batch):
+    """The planner's PickJug last acted in the stuck state, so the bridge's PickJug there repeats it: the
+    flag is set, and after the twist the planner's PickJug ends after one step without the jug, again
+    and again. Without the quirk every episode recovers; an episode that never tried PickJug first
+    is unaffected unless it shares the flag with one that did."""
+    result, picked_first, _ = hesitant_rollout(training_batch, False, None)
+    assert result.success.all() and 0 < picked_first.sum() < training_batch.size
+    own = jnp.arange(training_batch.size)
+    result, picked, flagged = hesitant_rollout(training_batch, True, own)
+    assert np.array_equal(picked, picked_first) and np.array_equal(flagged, picked)
+    assert np.array_equal(result.success, ~picked)
+    assert (result.stuck_events[picked] > 1).all() and (result.stuck_events[~picked] == 1).all()
+    result, _, flagged = hesitant_rollout(training_batch, True, None)  # one seed's episodes: one flag
+    assert flagged.all() and not result.success.any()
+
+
+def test_the_quirk_is_named_by_the_authors_preset_and_unknown_quirks_are_refused():
+    from jaxbridge.core.config import TrainConfig
+    from jaxbridge.learn.setup import make_setup
+    setup = make_setup(TrainConfig.for_env("coffee", "authors", num_seeds=1))
+    assert setup.train_env.shared_repeat_flag and setup.test_env.shared_repeat_flag
+    assert not make_setup(TrainConfig.for_env("coffee", num_seeds=1)).train_env.shared_repeat_flag
+    with pytest.raises(ValueError, match="has no quirk 'shared_repeat_flag'"):
+        make_setup(TrainConfig.for_env("doorknobs", num_seeds=1, env_quirks=("shared_repeat_flag",)))
+    config = TrainConfig.for_env("coffee", "authors")
+    assert TrainConfig.from_dict(config.to_dict()) == config and config.to_dict()["env_quirks"] == ["shared_repeat_flag"]

@@ -29,6 +29,7 @@ def test_the_authors_preset_reaches_the_learner_and_its_bridge(env):
     setup = make_setup(config)
     learner_config = setup.dqn.config  # what the updates, targets and polyak steps read
     expected = {**AUTHORS, "n_sample": AUTHORS_N_SAMPLE[env], "preset": "authors"}
+    assert setup.dqn.net.normalise and setup.init_learners().norm is not None  # min-max scaling
     assert {k: getattr(learner_config, k) for k in expected} == expected
     assert setup.bridge(setup.test_env).n_sample == AUTHORS_N_SAMPLE[env]
     assert setup.dqn.net.ensemble == 1
@@ -142,3 +143,60 @@ def test_random_draws_over_skills_or_over_ground_operators(ground_operators, exp
     bridge = RandomBridge(env, ground_operators)
     skills = jax.vmap(lambda k: bridge(None, obs, k).skill)(jax.random.split(jax.random.key(0), 6000))
     np.testing.assert_allclose(np.bincount(np.asarray(skills), minlength=6) / 6000, expected, atol=0.025)
+
+
+def test_minmax_scaling_is_fitted_to_the_stored_inputs_and_targets_and_scales_the_network():
+    """The authors' normalisation: per input column (features, skill one-hot, param) and for the targets,
+    shift = min and scale = max(range, 1) over the stored transitions only; the network sees the scaled
+    input and its output is scaled back."""
+    from jaxbridge.learn.dqn import fit_scaling
+    from jaxbridge.learn.q_bridge import encode
+    config = TrainConfig.for_env("light_switch_door", "authors", num_seeds=1)
+    setup = make_setup(config)
+    dqn, learner = setup.dqn, jax.tree.map(lambda x: x[0], setup.init_learners())
+    empty = fit_scaling(dqn, learner.buffer, jnp.zeros(config.buffer_capacity), None)
+    assert not np.asarray(empty["x_shift"]).any() and (np.asarray(empty["x_scale"]) == 1).all()
+    rng = np.random.default_rng(0)
+    n, data = 40, learner.buffer.data
+    features = rng.uniform(-3, 5, (n, dqn.num_features)).astype(np.float32)
+    features[:, 0] = rng.uniform(0.2, 0.4, n)  # a narrow column: range below 1, scale 1
+    skill, param = rng.integers(0, 3, n).astype(np.int32), rng.uniform(-1, 1, n).astype(np.float32)
+    data = data.replace(features=data.features.at[:n].set(features).at[n:].set(100.0),  # unstored rows ignored
+                        skill=data.skill.at[:n].set(skill), param=data.param.at[:n].set(param))
+    buffer = learner.buffer.replace(data=data, size=jnp.int32(n))
+    targets = jnp.full(config.buffer_capacity, 9.0).at[:n].set(rng.uniform(0, 1.5, n))
+    norm = fit_scaling(dqn, buffer, targets, None)
+    x = np.asarray(encode(dqn.env, features, skill, param))
+    np.testing.assert_allclose(norm["x_shift"], x.min(0))
+    np.testing.assert_allclose(norm["x_scale"], np.maximum(x.max(0) - x.min(0), 1.0))
+    assert norm["x_scale"][0] == 1.0 and norm["x_scale"][1] > 1.0
+    np.testing.assert_allclose(norm["y_shift"], targets[:n].min())
+    np.testing.assert_allclose(norm["y_scale"], max(float(targets[:n].max() - targets[:n].min()), 1.0))
+    scaled = {**learner.params, "norm": norm}
+    plain = QNetwork(config.hidden_sizes, 1, config.activation, config.output_init)
+    expected = plain.apply({"params": learner.params["params"]["net"]}, (x - norm["x_shift"]) / norm["x_scale"])
+    np.testing.assert_allclose(dqn.net.apply(scaled, x), expected * norm["y_scale"] + norm["y_shift"], rtol=1e-5)
+
+
+def test_minmax_scaling_of_a_split_full_state_equals_scaling_the_whole_input():
+    """Maple Q's split input (varying entries, the task's constants, the action) is scaled part by part as
+    the whole input would be."""
+    from jaxbridge.learn.q_bridge import SplitInput, TaskPart, encode, encode_action
+    config = TrainConfig.for_env("doorknobs", "authors", num_seeds=1, approach="maple_q")
+    setup = make_setup(config)
+    dqn, learner = setup.dqn, jax.tree.map(lambda x: x[0], setup.init_learners())
+    split, width = dqn.split, dqn.num_features + dqn.env.num_skills + 2
+    rng = np.random.default_rng(1)
+    norm = {"x_shift": jnp.asarray(rng.uniform(-1, 1, width), jnp.float32),
+            "x_scale": jnp.asarray(rng.uniform(1, 3, width), jnp.float32),
+            "y_shift": jnp.float32(0.25), "y_scale": jnp.float32(1.5)}
+    params = jax.tree.map(lambda p: p + 0.1 * jax.random.normal(jax.random.key(2), p.shape), learner.params)
+    full = jnp.asarray(rng.normal(size=(3, dqn.num_features)), jnp.float32)
+    skill, param = jnp.array([0, 1, 3], jnp.int32), jnp.array([0.5, -0.2, 0.0], jnp.float32)
+    task = TaskPart(values=full[:1, np.array(split.constant)], index=jnp.zeros(3, jnp.int32), split=split)
+    whole = jnp.concatenate([full.at[:, np.array(split.constant)].set(full[0, np.array(split.constant)]),
+                             encode_action(dqn.env, skill, param)], -1)
+    parts = SplitInput(full[:, np.array(split.varying)], encode_action(dqn.env, skill, param), task)
+    variables = {**params, "norm": norm}
+    np.testing.assert_allclose(dqn.net.apply(variables, parts), dqn.net.apply(variables, whole), rtol=2e-4, atol=1e-5)
+    assert whole.shape[-1] == width and encode(dqn.env, full, skill, param).shape == whole.shape

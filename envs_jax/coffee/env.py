@@ -15,7 +15,8 @@ task of seeds 0-7 (its longest episode there takes 101 steps, on a 4-cup task; a
 authors' 100 (with 4 cups in every task) would cut that one episode short by a step. Training episodes:
 100 steps, as the authors' (1 cup: the oracle needs 58 at most).
 
-Skills finish when they make no progress (see `coffee_skills`), instead of the authors' class-level flag.
+Skills finish when they make no progress (see `coffee_skills`), instead of the authors' class-level flag;
+the `shared_repeat_flag` quirk switches their flag back on.
 """
 from __future__ import annotations
 
@@ -89,6 +90,7 @@ class Coffee(NoveltyEnv):
     """The env at a fixed capacity: at most `max_cups` cups per task."""
 
     max_cups: int = MAX_CUPS
+    shared_repeat_flag: bool = False
 
     name = "coffee"
     skills = (SkillSpec("MoveToTwistJug"), SkillSpec("TwistJug", -1.0, 1.0), SkillSpec("PickJug"),
@@ -106,7 +108,11 @@ class Coffee(NoveltyEnv):
     # Fewer updates: a cycle yields few bridge decisions, and 1000 updates overfit them (docs/RESULTS.md, Coffee).
     train_defaults: ClassVar[dict] = {"updates_per_cycle": 250}
     test_protocols = world.TEST_PROTOCOLS
-    authors_defaults: ClassVar[dict] = {"n_sample": 10, "test_protocol": "authors"}
+    authors_defaults: ClassVar[dict] = {"n_sample": 10, "test_protocol": "authors",
+                                        "env_quirks": ("shared_repeat_flag",)}
+    quirks = {"shared_repeat_flag": "MoveToTwistJug or PickJug acting twice in an identical state sets a "
+              "flag, shared by the seed's concurrent episodes for the rest of the rollout, after which both "
+              "end after one step (the authors' class-level flag, envs.md §4.6)"}
 
     @property
     def full_state_fits(self) -> bool:
@@ -173,7 +179,7 @@ class Coffee(NoveltyEnv):
         return world.goal_reached(state)
 
     def state_vector(self, state: State) -> jax.Array:
-        return skills.state_vector(state)
+        return world.state_vector(state)
 
     def features(self, state: State, stuck_state: State) -> jax.Array:
         """envs.md §4.8: always the jug, relative to the robot."""
@@ -205,7 +211,19 @@ class Coffee(NoveltyEnv):
         return skills.skill_action(state, call)
 
     def skill_done(self, prev_state: State, state: State, call: SkillCall) -> jax.Array:
-        return skills.skill_done(prev_state, state, call)
+        return skills.skill_done(prev_state, state, call, self.shared_repeat_flag)
+
+    def after_skill_step(self, state: State, next_state: State, call: SkillCall) -> State:
+        return skills.remember_call(state, next_state, call) if self.shared_repeat_flag else next_state
+
+    def share_between_episodes(self, states: State, groups: jax.Array) -> State:
+        """With `shared_repeat_flag`: the authors' flag was a class attribute, so one episode setting it
+        sets it for all of the seed's episodes (they ran one after another; ours run side by side)."""
+        if not self.shared_repeat_flag:
+            return states
+        same = groups[:, None] == groups[None, :]
+        shared = jnp.any(same & states.memory.repeated[None, :], axis=1)
+        return states.replace(memory=states.memory.replace(repeated=shared))
 
     # ---- the hand-written bridge used as an oracle in tests and eval ----------------------------
     def oracle_bridge(self, params, obs, key):

@@ -5,7 +5,8 @@ Every skill moves with one helper: head for a 3-D point, at most 2.5 per step, a
 Every skill also finishes when a step made no progress (the state did not change). This replaces the
 authors' class-level "repeated state" flag, which, once set by any execution of MoveToTwistJug or
 PickJug, made both options end after one step for the rest of the learning cycle (envs.md §4.6); here
-each execution only looks at its own last step.
+each execution only looks at its own last step. The env's `shared_repeat_flag` quirk switches the
+authors' flag back on (`remember_call`, `skill_done`).
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import numpy as np
 
 from envs_jax.coffee import world
 from envs_jax.base import SkillCall
-from envs_jax.coffee.world import FINGERS, MAX_POSITION_STEP, POUR_TILT, SAFE_Z, TILT, X, Y, Z, State
+from envs_jax.coffee.world import FINGERS, MAX_POSITION_STEP, POUR_TILT, SAFE_Z, TILT, X, Y, Z, SkillMemory, State
 
 MOVE_TO_TWIST_JUG, TWIST_JUG, PICK_JUG, PLACE_JUG_IN_MACHINE, TURN_MACHINE_ON, POUR = range(6)
 NEAR = 0.1  # squared distance at which a skill counts a waypoint as reached
@@ -114,14 +115,22 @@ def skill_action(state: State, call: SkillCall) -> jax.Array:
     return actions[call.skill]
 
 
-def state_vector(state: State) -> jax.Array:
-    """float32[11 + C]: everything that changes, for "did the state change"."""
-    flags = jnp.stack([state.jug_rot, state.jug_held, state.jug_filled, state.machine_on]).astype(jnp.float32)
-    return jnp.concatenate([state.robot, state.jug_xy, flags, state.cup_liquid])
+def remember_call(state: State, next_state: State, call: SkillCall) -> State:
+    """The authors' MoveToTwistJug and PickJug policies remember the state they last acted in (any
+    execution, the planner's or the bridge's); acting again in an identical state sets the repeated flag
+    (envs.md §4.6). `call` acted in `state`; returns `next_state` remembering it."""
+    vec, memory = world.state_vector(state), state.memory
+    pick, twist = call.skill == PICK_JUG, call.skill == MOVE_TO_TWIST_JUG
+    seen = jnp.where(pick, memory.pick_seen, memory.twist_seen)
+    repeated = (pick | twist) & jnp.all(vec == seen)
+    return next_state.replace(memory=SkillMemory(
+        repeated=next_state.memory.repeated | repeated,
+        pick_seen=jnp.where(pick, vec, memory.pick_seen), twist_seen=jnp.where(twist, vec, memory.twist_seen)))
 
 
-def skill_done(prev_state: State, state: State, call: SkillCall) -> jax.Array:
-    """Each skill's own termination (envs.md §4.6), or a step that changed nothing."""
+def skill_done(prev_state: State, state: State, call: SkillCall, repeat_flag: bool = False) -> jax.Array:
+    """Each skill's own termination (envs.md §4.6), or a step that changed nothing. With the authors'
+    `repeat_flag`, MoveToTwistJug and PickJug end by their flag instead of by a step without progress."""
     reached = jnp.stack([
         world.twisting(state),  # MoveToTwistJug
         world.hand_empty(state),  # TwistJug
@@ -130,5 +139,8 @@ def skill_done(prev_state: State, state: State, call: SkillCall) -> jax.Array:
         state.machine_on,  # TurnMachineOn
         world.cup_filled(state)[call.slot],  # Pour
     ])[call.skill]
-    no_progress = jnp.all(state_vector(prev_state) == state_vector(state))
+    no_progress = jnp.all(world.state_vector(prev_state) == world.state_vector(state))
+    if repeat_flag:
+        remembering = (call.skill == MOVE_TO_TWIST_JUG) | (call.skill == PICK_JUG)
+        return reached | jnp.where(remembering, state.memory.repeated, no_progress)
     return reached | no_progress

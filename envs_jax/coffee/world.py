@@ -152,6 +152,16 @@ class Task:
 
 
 @struct.dataclass
+class SkillMemory:
+    """What the authors' MoveToTwistJug and PickJug policies kept between calls (envs.md §4.6), used only
+    with the env's `shared_repeat_flag` quirk (skills.remember_call); the dynamics never read it."""
+
+    repeated: jax.Array  # bool: one of them was called twice in the same state
+    pick_seen: jax.Array  # float32[D]: the state vector PickJug last acted in (NaN: never)
+    twist_seen: jax.Array  # float32[D]: the same for MoveToTwistJug
+
+
+@struct.dataclass
 class State:
     robot: jax.Array  # float32[6]: x, y, z, tilt, wrist, fingers
     jug_xy: jax.Array  # float32[2]
@@ -161,6 +171,13 @@ class State:
     machine_on: jax.Array  # bool
     cup_liquid: jax.Array  # float32[C]: current liquid
     task: Task
+    memory: SkillMemory
+
+
+def state_vector(state: State) -> jax.Array:
+    """float32[12 + C]: everything that changes, for "did the state change"."""
+    flags = jnp.stack([state.jug_rot, state.jug_held, state.jug_filled, state.machine_on]).astype(jnp.float32)
+    return jnp.concatenate([state.robot, state.jug_xy, flags, state.cup_liquid])
 
 
 def task_arrays(spec: CoffeeTask, max_cups: int) -> Task:
@@ -174,9 +191,11 @@ def task_arrays(spec: CoffeeTask, max_cups: int) -> Task:
 
 
 def reset(task: Task) -> State:
+    never = jnp.full(12 + task.cup_mask.shape[-1], jnp.nan, jnp.float32)
     return State(robot=jnp.asarray(ROBOT_INIT), jug_xy=task.jug_xy, jug_rot=jnp.float32(JUG_INIT_ROT),
                  jug_held=jnp.bool_(False), jug_filled=jnp.bool_(False), machine_on=jnp.bool_(False),
-                 cup_liquid=jnp.zeros(task.cup_mask.shape, jnp.float32), task=task)
+                 cup_liquid=jnp.zeros(task.cup_mask.shape, jnp.float32), task=task,
+                 memory=SkillMemory(repeated=jnp.bool_(False), pick_seen=never, twist_seen=never))
 
 
 # ---- geometry -----------------------------------------------------------------------------------------

@@ -8,8 +8,9 @@ from dataclasses import dataclass
 # 2: `approach` (version 1 configs were all "ours" and still load); 3: `split_task_state` (older runs
 # stored whole observations and load with it off); 4: `preset`, `test_protocol`, `activation`,
 # `target_init`, `reset_optimizer`, `explore_ground_operators` (older runs were the jaxbridge preset,
-# which their defaults are); 5: `output_init` (older runs started their output layer at zero)
-CONFIG_VERSION = 5
+# which their defaults are); 5: `output_init` (older runs started their output layer at zero); 6:
+# `env_quirks`, `normalise` (older runs had none)
+CONFIG_VERSION = 6
 
 
 # The numeric hyperparameters that change no shape or program: pytree leaves of the cycle
@@ -31,7 +32,7 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
 
 # The string options and what they may be.
 CHOICES = {"polyak_per": ("update", "decision"), "activation": ("leaky_relu", "relu"),
-           "target_init": ("copy", "apart"), "output_init": ("zero", "uniform")}
+           "target_init": ("copy", "apart"), "output_init": ("zero", "uniform"), "normalise": ("none", "minmax")}
 
 
 @dataclass(frozen=True)
@@ -89,6 +90,11 @@ class TrainConfig:
     """The Q-network's output layer at the start: "zero" (ours: the untrained Q is 0 everywhere) or
     "uniform" as PyTorch's default nn.Linear, +-1/sqrt(fan_in) (the authors'; the hidden layers start
     so in both)."""
+    normalise: str = "none"
+    """The Q-network's input and output scaling: "none" (ours: features and targets lie in small fixed
+    ranges) or "minmax" (the authors'): every cycle, after relabelling, each input entry is shifted by
+    its minimum over the replay buffer and divided by its range (at least 1), the targets likewise; the
+    network fits the scaled targets and its output is scaled back. The target network shares the scaling."""
     target_init: str = "copy"
     """The target network at the start: a "copy" of the online one (ours) or initialised "apart" from
     it (the authors'), then tracking it by polyak steps."""
@@ -120,6 +126,9 @@ class TrainConfig:
     """Clip the bootstrapped next-state value of every TD target to [0, 1 + call_planner_bonus], the range
     every true Q lies in (rewards are 0, or that much at the goal). Stops the max over sampled parameters
     from feeding its upward noise back into the targets (off in the paper)."""
+    env_quirks: tuple[str, ...] = ()
+    """Behaviours of the authors' env that ours departs from, switched back on by name (the env's `quirks`,
+    e.g. Coffee's "shared_repeat_flag"); none by default."""
     split_task_state: bool = True
     """The full-state ablations store only the entries of the full state that change within a task
     (`full_state_varying` of the env) and multiply the task's constants once per task in the first layer:
@@ -137,12 +146,14 @@ class TrainConfig:
             if value < low or (value == low and not low_included) or (high is not None and value > high):
                 where = f"{'at least' if low_included else 'above'} {low}" + (f" and at most {high}" if high is not None else "")
                 raise ValueError(f"{field} must be {where}, got {value}")
+        if len(set(self.env_quirks)) != len(self.env_quirks):
+            raise ValueError(f"env_quirks names a quirk twice: {', '.join(self.env_quirks)}")
         if not self.hidden_sizes or min(self.hidden_sizes) < 1:
             raise ValueError(f"hidden_sizes must be one or more positive widths, got {self.hidden_sizes}")
 
     def to_dict(self) -> dict:
         return {**dataclasses.asdict(self), "hidden_sizes": list(self.hidden_sizes),
-                "config_version": CONFIG_VERSION}
+                "env_quirks": list(self.env_quirks), "config_version": CONFIG_VERSION}
 
     @classmethod
     def from_dict(cls, data: dict) -> "TrainConfig":
@@ -152,14 +163,15 @@ class TrainConfig:
             data.setdefault("approach", "ours")
         if version in (1, 2):
             data.setdefault("split_task_state", False)
-        elif version not in (3, 4, CONFIG_VERSION):
+        elif version not in (3, 4, 5, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields
         if unknown:
             raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")
-        if "hidden_sizes" in data:
-            data["hidden_sizes"] = tuple(data["hidden_sizes"])
+        for field in ("hidden_sizes", "env_quirks"):
+            if field in data:
+                data[field] = tuple(data[field])
         return cls(**data)
 
     @classmethod

@@ -238,6 +238,8 @@ def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
 
     action = jnp.where(call_planner, 0.0, env.skill_action(state, call))  # CallPlanner: a no-op step
     next_state = tree_where(live, env.step(state, action), state)
+    acted = live & ~call_planner & call.running  # a skill's policy chose this step's action
+    next_state = tree_where(acted, env.after_skill_step(state, next_state, call), next_state)
     finished = env.skill_done(state, next_state, call)
     planner_acted = live & (ep.control == PLANNER)
     actor = jnp.where(call_planner, ACTOR_CALL_PLANNER, jnp.where(planner_acted, ACTOR_PLANNER, ACTOR_BRIDGE))
@@ -280,17 +282,21 @@ def no_plan(num_episodes: int, words: int) -> PlanLookup:
 
 @partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls", "shared_params"))
 def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArrays, keys: jax.Array,
-            max_steps: int, record: bool = False, controls: Controls = Controls(), shared_params: bool = False):
+            max_steps: int, record: bool = False, controls: Controls = Controls(), shared_params: bool = False,
+            groups: jax.Array | None = None):
     """Run the meta-policy on a batch of B episodes for at most `max_steps` env steps.
 
     `batch` (the episodes' tasks, plan tables and horizons), keys (one per episode) and bridge_params (None,
     or a pytree) carry a leading batch axis B; with `shared_params`, bridge_params has none and every
     episode uses it (one network: its layers multiply all episodes at once, not one matrix per episode).
-    `controls` picks the approach's parts of the meta-policy.
+    `controls` picks the approach's parts of the meta-policy. `groups` (int[B], default: one group) says
+    which episodes run concurrently in one world, for what an env shares between them
+    (`share_between_episodes`: one seed's episodes of a cycle phase).
     Returns EpisodeResult[B] and, with `record`, StepRecord[max_steps, B].
     """
     tasks, tables, horizons = batch.tasks, batch.tables, batch.horizons
     num_episodes = horizons.shape[0]
+    groups = jnp.zeros(num_episodes, jnp.int32) if groups is None else groups
     episodes = jax.vmap(partial(start_episode, env, controls))(tasks, horizons)
     no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
                            param=jnp.zeros(num_episodes, jnp.float32),
@@ -314,6 +320,7 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArra
             lambda: no_decision)
         stuck = episodes.stuck_events > stuck_before
         episodes, rec = jax.vmap(partial(execute, env))(episodes, decide, decision, stuck)
+        episodes = episodes.replace(env_state=env.share_between_episodes(episodes.env_state, groups))
         return episodes, (rec if record else None)
 
     randomness = step_randomness(keys, max_steps)

@@ -2,13 +2,12 @@
 
 * `jaxbridge` (the default, what we recommend): TrainConfig's defaults and the env's `train_defaults`.
 * `authors`: what the authors' code did (reference/method.md §5, §7) where ours differs, per env: the
-  values below, then the env's `authors_defaults` (its n_sample, its test tasks). Flags given on the
+  values below, then the env's `authors_defaults` (its n_sample, its test tasks, its env quirks). Flags given on the
   command line still override a preset's values.
 
-Departures the preset does not switch yet (docs/DESIGN.md, "Departures"): the authors' per-cycle
-min-max input/target normalisation, their fitting schedule (up to 100,000 iterations stopped after
-5,000 without a better minibatch loss, the best weights restored; the preset keeps our fixed updates
-per cycle) and Coffee's repeated-state flag shared between two skills.
+Departures the preset does not switch yet (docs/DESIGN.md, "Departures"): the authors' fitting schedule
+(up to 100,000 iterations stopped after 5,000 without a better minibatch loss, the best weights
+restored; the preset keeps our fixed updates per cycle).
 """
 from __future__ import annotations
 
@@ -29,6 +28,7 @@ AUTHORS = {
     "target_init": "apart",  # the target initialised apart from the online network
     "reset_optimizer": True,  # a new Adam every cycle
     "explore_ground_operators": True,  # epsilon draws uniformly over the applicable ground operators
+    "normalise": "minmax",  # per-cycle min-max scaling of the network's inputs and targets
 }
 
 

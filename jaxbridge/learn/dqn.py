@@ -15,7 +15,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
-                                      candidate_skills, input_size)
+                                      candidate_skills, encode_action, input_size)
 from jaxbridge.learn.replay import ReplayBuffer, init_buffer, sample_indices
 from jaxbridge.learn.transitions import Transition, for_buffer, successor_features
 
@@ -31,6 +31,17 @@ class Learner:
     key: jax.Array
     decisions: jax.Array  # int32: training bridge decisions so far (drives epsilon)
     updates: jax.Array  # int32: minibatch updates so far
+    norm: Any = None  # with `normalise`: the networks' input and output scaling (QNetwork's "norm")
+
+    @property
+    def online(self) -> Any:
+        """The online network's variables for `QNetwork.apply` (its parameters, and its scaling if any)."""
+        return self.params if self.norm is None else {**self.params, "norm": self.norm}
+
+    @property
+    def target(self) -> Any:
+        """The target network's variables: its parameters with the online network's scaling."""
+        return self.target_params if self.norm is None else {**self.target_params, "norm": self.norm}
 
 
 @dataclass(frozen=True)
@@ -69,7 +80,8 @@ class DQN:
 
 
 def q_network(config: TrainConfig) -> QNetwork:
-    return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init)
+    return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
+                    normalise=config.normalise == "minmax")
 
 
 def make_optimizer(hyper: Hyper | TrainConfig) -> optax.GradientTransformation:
@@ -112,14 +124,16 @@ def init_learner(dqn: DQN, key: jax.Array) -> Learner:
     k_init, k_run = jax.random.split(key)
     env, num_features = dqn.env, dqn.num_features
     sample = jnp.zeros((1, input_size(env, num_features)), jnp.float32)
-    params = dqn.net.init(k_init, sample)
+    init = lambda key: {"params": dqn.net.init(key, sample)["params"]}  # the scaling, if any, is not a parameter
+    params = init(k_init)
     target = (jax.tree.map(jnp.copy, params) if dqn.config.target_init == "copy"
-              else dqn.net.init(jax.random.fold_in(k_init, 1), sample))
+              else init(jax.random.fold_in(k_init, 1)))
+    norm = dqn.net.init(k_init, sample)["norm"] if dqn.net.normalise else None
     return Learner(params=params, target_params=target,
                    opt_state=dqn.optimizer.init(params),
                    buffer=init_buffer(empty_transition(dqn), dqn.config.buffer_capacity),
                    key=k_run,
-                   decisions=jnp.int32(0), updates=jnp.int32(0))
+                   decisions=jnp.int32(0), updates=jnp.int32(0), norm=norm)
 
 
 def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key: jax.Array,
@@ -159,12 +173,36 @@ def relabel(dqn: DQN, learner: Learner, key: jax.Array, task: TaskPart | None = 
         batch = jax.tree.map(lambda x: x[i], data)
         slots = i * RELABEL_CHUNK + jnp.arange(RELABEL_CHUNK)
         batch = batch.replace(next_features=successor_features(buffer.data.features, slots))
-        y = td_targets(dqn, learner.params, learner.target_params, batch, jax.random.fold_in(key, i), task, hyper)
+        y = td_targets(dqn, learner.online, learner.target, batch, jax.random.fold_in(key, i), task, hyper)
         return targets.at[i].set(y)
 
     filled = (buffer.size + RELABEL_CHUNK - 1) // RELABEL_CHUNK
     targets = jax.lax.fori_loop(0, filled, chunk_targets, jnp.zeros((chunks, RELABEL_CHUNK), jnp.float32))
     return targets.reshape(-1)[: buffer.capacity]
+
+
+def fit_scaling(dqn: DQN, buffer: ReplayBuffer, targets: jax.Array, task: TaskPart | None) -> dict:
+    """The authors' min-max scaling (reference/method.md §5) of the stored transitions' inputs and their
+    targets: shift = the minimum, scale = the range, at least 1; an empty buffer leaves it the identity."""
+    stored = jnp.arange(buffer.capacity) < buffer.size
+    data = buffer.data
+    action = encode_action(dqn.env, data.skill, data.param)
+
+    def bounds(x):  # per column over the stored rows
+        return (jnp.min(jnp.where(stored[:, None], x, jnp.inf), axis=0),
+                jnp.max(jnp.where(stored[:, None], x, -jnp.inf), axis=0))
+    (low_f, high_f), (low_a, high_a) = bounds(data.features), bounds(action)
+    if task is not None:  # the constant entries are the training tasks' values
+        width = task.split.width
+        low_f = jnp.zeros(width).at[np.array(task.split.varying)].set(low_f).at[np.array(task.split.constant)].set(
+            jnp.min(task.values, axis=0))
+        high_f = jnp.zeros(width).at[np.array(task.split.varying)].set(high_f).at[np.array(task.split.constant)].set(
+            jnp.max(task.values, axis=0))
+    low, high = jnp.concatenate([low_f, low_a]), jnp.concatenate([high_f, high_a])
+    (y_low,), (y_high,) = bounds(targets[:, None])
+    empty = buffer.size == 0
+    return {"x_shift": jnp.where(empty, 0.0, low), "x_scale": jnp.where(empty, 1.0, jnp.maximum(high - low, 1.0)),
+            "y_shift": jnp.where(empty, 0.0, y_low), "y_scale": jnp.where(empty, 1.0, jnp.maximum(y_high - y_low, 1.0))}
 
 
 def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array,
@@ -176,9 +214,13 @@ def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
 
     def loss_fn(params):
-        q = net.apply(params, batch_input(env, batch.features, batch.skill, batch.param, at_task(task, batch.task)),
+        variables = learner.replace(params=params).online
+        q = net.apply(variables, batch_input(env, batch.features, batch.skill, batch.param, at_task(task, batch.task)),
                       members=True)
-        return jnp.mean((q - targets[index]) ** 2), jnp.max(jnp.abs(q))  # every member fits the targets
+        error = q - targets[index]
+        if learner.norm is not None:  # the authors' loss is on the scaled targets
+            error = error / learner.norm["y_scale"]
+        return jnp.mean(error ** 2), jnp.max(jnp.abs(q))  # every member fits the targets
 
     (loss, q_abs_max), grads = jax.value_and_grad(loss_fn, has_aux=True)(learner.params)
     updates, opt_state = make_optimizer(hyper).update(grads, learner.opt_state, learner.params)
@@ -227,8 +269,10 @@ def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None,
     task = dqn.task_part(tasks)
     learner = track_target(config, learner, decisions)
     key, k_relabel = jax.random.split(learner.key)
-    targets = relabel(dqn, learner, k_relabel, task, hyper)
+    targets = relabel(dqn, learner, k_relabel, task, hyper)  # with the previous cycle's scaling
     learner = learner.replace(key=key)
+    if learner.norm is not None:
+        learner = learner.replace(norm=fit_scaling(dqn, learner.buffer, targets, task))
     if config.reset_optimizer:  # the authors' new Adam for every cycle's fit
         learner = learner.replace(opt_state=dqn.optimizer.init(learner.params))
 

@@ -47,7 +47,7 @@ class CycleMetrics:
 def episode_params(learners: Learner, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:
     """Bridge parameters for a batch of episodes: each episode gets its seed's network (owner[i] is the
     seed index of episode i) and exploration rate eps[i] (zeros for the greedy bridge)."""
-    return QBridgeParams(q=jax.tree.map(lambda x: x[owner], learners.params), epsilon=eps)
+    return QBridgeParams(q=jax.tree.map(lambda x: x[owner], learners.online), epsilon=eps)
 
 
 def _repeat(params, n: int):
@@ -65,9 +65,11 @@ def make_seed_cycle(setup: Setup) -> Callable:
     CycleMetrics of scalars). The same computation for every seed and setting."""
     config, approach, train, test = setup.config, setup.approach, setup.train, setup.test
     controls = approach.controls
-    train_bridge, test_bridge = setup.bridge(train.env), setup.bridge(test.env)
+    # The task batches are shared by every approach and config of an experiment; the quirks are the config's.
+    train_env, test_env = train.env.with_quirks(config.env_quirks), test.env.with_quirks(config.env_quirks)
+    train_bridge, test_bridge = setup.bridge(train_env), setup.bridge(test_env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
-    call_planner = train.env.num_skills
+    call_planner = train_env.num_skills
     # Every episode of a seed's cycle has the seed's network: the split approaches give it to the rollouts
     # once (fast matrix products); the others keep a copy per episode, the layout their published numbers
     # were computed with (the products sum in another order, so sharing would change their last bits).
@@ -89,8 +91,8 @@ def make_seed_cycle(setup: Setup) -> Callable:
 
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
         eps = epsilon(hyper, learner.decisions)
-        explore = bridge_params(learner.params, eps, episodes)
-        result, records = rollout(train.env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
+        explore = bridge_params(learner.online, eps, episodes)
+        result, records = rollout(train_env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
                                   config.train_steps, record=approach.learns, controls=controls, shared_params=shared)
         decisions = result.bridge_decisions.sum()
 
@@ -111,8 +113,8 @@ def make_seed_cycle(setup: Setup) -> Callable:
         learner = learner.replace(key=k_next)
 
         # 4. Greedy evaluation on the seed's test tasks.
-        greedy = bridge_params(learner.params, jnp.float32(0.0), num_tests)
-        tested, _ = rollout(test.env, test_bridge, greedy, test_tasks, jax.random.split(k_test, num_tests),
+        greedy = bridge_params(learner.online, jnp.float32(0.0), num_tests)
+        tested, _ = rollout(test_env, test_bridge, greedy, test_tasks, jax.random.split(k_test, num_tests),
                             test.max_steps, controls=controls, shared_params=shared)
 
         metrics = CycleMetrics(

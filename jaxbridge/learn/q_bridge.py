@@ -122,6 +122,20 @@ class _Member(nn.Module):
         return carry, _mlp(x, self.hidden_sizes, self.activation, self.output_init)
 
 
+def scaled_input(x: jax.Array | SplitInput, shift: jax.Array, scale: jax.Array) -> jax.Array | SplitInput:
+    """(x - shift) / scale per entry of the whole input [I] (a SplitInput's parts each by their rows)."""
+    if not isinstance(x, SplitInput):
+        return (x - shift) / scale
+    part = lambda values, rows: (values - shift[rows]) / scale[rows]
+    actions = np.arange(x.width - x.action.shape[-1], x.width)
+    if x.task is None:
+        return x.replace(observation=part(x.observation, np.arange(x.observation.shape[-1])),
+                         action=part(x.action, actions))
+    rows = x.task.split
+    return x.replace(observation=part(x.observation, np.array(rows.varying)), action=part(x.action, actions),
+                     task=x.task.replace(values=part(x.task.values, np.array(rows.constant))))
+
+
 class QNetwork(nn.Module):
     """MLP with leaky-ReLU hidden layers and a scalar output; optionally an ensemble of such MLPs whose
     value is their minimum (clipped double Q).
@@ -136,11 +150,22 @@ class QNetwork(nn.Module):
     ensemble: int = 1
     activation: str = "leaky_relu"  # of the hidden units: ACTIVATIONS
     output_init: str = "zero"  # the output layer's initialisation: OUTPUT_SCALES
+    # The authors' min-max scaling: the "norm" collection holds x_shift, x_scale [input] and y_shift,
+    # y_scale (learn/dqn.py fits them every cycle; they are not trained).
+    normalise: bool = False
 
     @nn.compact
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
         """Q of x[..., input] (or of a SplitInput): [...], or every member's, [ensemble, ...], with
         `members`."""
+        if self.normalise:
+            width = x.width if isinstance(x, SplitInput) else x.shape[-1]
+            norm = {name: self.variable("norm", name, init, shape).value for name, init, shape in (
+                ("x_shift", jnp.zeros, (width,)), ("x_scale", jnp.ones, (width,)),
+                ("y_shift", jnp.zeros, ()), ("y_scale", jnp.ones, ()))}
+            x = scaled_input(x, norm["x_shift"], norm["x_scale"])
+            q = QNetwork(self.hidden_sizes, self.ensemble, self.activation, self.output_init, name="net")(x, members)
+            return q * norm["y_scale"] + norm["y_shift"]
         if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
             q = _mlp(x, self.hidden_sizes, self.activation, self.output_init)[None]
         else:

@@ -26,8 +26,8 @@ class Setup:
     config: TrainConfig
     env_cls: type[NoveltyEnv]
     approach: Approach
-    train_env: NoveltyEnv  # sized to the seeds' training tasks: the learners' shapes follow it
-    test_env: NoveltyEnv  # sized to the seeds' test tasks
+    train_env: NoveltyEnv  # sized to the seeds' training tasks (the learners' shapes follow it), with the config's quirks
+    test_env: NoveltyEnv  # sized to the seeds' test tasks, with the config's quirks
     dqn: DQN  # network, optimiser and observation width, on the training env
 
     @cached_property
@@ -54,8 +54,9 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     """Resolve `config` (its env by name unless `env_cls` is given, its approach)."""
     env_cls = env_cls or env_class(config.env)
     approach = get_approach(config.approach)
-    train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds])
-    test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0])
+    train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds]).with_quirks(config.env_quirks)
+    test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
+                                 ).with_quirks(config.env_quirks)
     split = task_state_split(train_env) if approach.controls.full_state and config.split_task_state else None
     dqn = make_dqn(config, train_env, approach.observation_size(train_env), split)
     return Setup(config, env_cls, approach, train_env, test_env, dqn)

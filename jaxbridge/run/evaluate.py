@@ -1,11 +1,13 @@
 """Evaluate a bridge on every seed's test tasks and summarise per seed."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from jaxbridge.core.bridges import Bridge
@@ -37,7 +39,7 @@ def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int =
                controls: Controls = Controls()) -> EpisodeResult:
     """One rollout of every task in the batch (bridge_params: None or batched over tasks)."""
     result, _ = rollout(batch.env, bridge, bridge_params, batch.arrays, jax.random.split(jax.random.key(seed), batch.size),
-                        batch.max_steps, controls=controls)
+                        batch.max_steps, controls=controls, groups=jnp.asarray(batch.seeds, jnp.int32))
     return jax.tree.map(np.asarray, result)
 
 
@@ -145,6 +147,7 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0, 
         sweep = env_cls.novelty_sweep  # its horizon rule scales with the tasks' size
         batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None,
                            progress=SlowWork(f"{env_cls.name}: sized tasks and plan tables"))
+    batch = dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks))  # as the run trained
     bridge, greedy, controls = policy.on(batch)
     result = run_bridge(batch, bridge, greedy, seed, controls)
     return config, policy.step, batch, result, (bridge, greedy, controls)
