@@ -14,6 +14,7 @@ import io
 from functools import partial
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
@@ -36,10 +37,11 @@ def drawer_for(env: NoveltyEnv) -> Drawer:
 
 # ---- recording ---------------------------------------------------------------------------------
 @partial(jax.jit, static_argnames=("env", "bridge", "drawer", "max_steps", "controls"))
-def _recorded_rollout(env, bridge, drawer, params, batch, keys, max_steps, controls):
+def _recorded_rollout(env, bridge, drawer, params, batch, keys, max_steps, controls, groups):
     """rollout(record=True), keeping of each recorded state only its snapshot and details (XLA then drops
     the rest), and of each step the ground skill it ran."""
-    result, records = rollout(env, bridge, params, batch, keys, max_steps, record=True, controls=controls)
+    result, records = rollout(env, bridge, params, batch, keys, max_steps, record=True, controls=controls,
+                              groups=groups)
     per_state = lambda state: (*drawer.snapshot(env, state), drawer.details(env, state))
     xy, door_open, details = jax.vmap(jax.vmap(per_state))(records.env_state)  # [T, B, ...]
     per_step = (records.actor, records.skill, records.slot, records.param, records.decided)
@@ -51,7 +53,10 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
     """Episodes `indices` of `run_bridge(batch, bridge, bridge_params, seed, controls)`, recorded.
 
     `expected`, that evaluation's results, checks that the re-run episodes are the evaluated ones."""
-    idx = np.asarray(indices, np.int64)
+    wanted = np.asarray(indices, np.int64)
+    # Every episode of the wanted episodes' seeds is re-run: an env may share state between a seed's
+    # concurrent episodes (`share_between_episodes`); alone, an episode's numbers are its own.
+    idx = np.flatnonzero(np.isin(batch.seeds, batch.seeds[wanted]))
     take = lambda tree: jax.tree.map(lambda x: x[idx], tree)
     keys = jax.random.split(jax.random.key(seed), batch.size)[idx]
     params = None if bridge_params is None else take(bridge_params)
@@ -59,13 +64,15 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
     # its first max_steps steps do not depend on how many are drawn (partitionable threefry); the check
     # against `expected` below would catch it if they did.
     result, (actor, skill, slot, param, decided), (xy, door_open, details) = jax.tree.map(np.asarray, _recorded_rollout(
-        batch.env, bridge, drawer_for(batch.env), params, take(batch.arrays), keys, batch.max_steps + 1, controls))
+        batch.env, bridge, drawer_for(batch.env), params, take(batch.arrays), keys, batch.max_steps + 1, controls,
+        jnp.asarray(batch.seeds[idx], jnp.int32)))
     if expected is not None:
         for field in ("success", "steps", "planner_calls", "bridge_decisions", "stuck_events"):
             if not np.array_equal(getattr(result, field), np.asarray(getattr(expected, field))[idx]):
                 raise RuntimeError(f"the re-run episodes differ from the evaluated ones in {field}")
     traces = []
-    for row, i in enumerate(idx):
+    for i in wanted:
+        row = int(np.searchsorted(idx, i))
         n, owner = int(result.steps[row]), int(batch.seeds[i])
         traces.append(EpisodeTrace(
             spec=batch.specs[i], seed=owner, task=int(i - np.argmax(batch.seeds == owner)),
