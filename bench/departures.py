@@ -36,7 +36,8 @@ def rows(env: str) -> dict[str, tuple[dict, dict]]:
     """{departure: (our values, the authors' values)} of every switchable departure where they differ on `env`."""
     ours, theirs = preset_values("jaxbridge", env_class(env)), preset_values("authors", env_class(env))
     base = TrainConfig.for_env(env)
-    groups = {"clip_bootstrap": ("clip_bootstrap", "q_ensemble")}  # Doorknobs' two guards are one departure
+    groups = {"clip_bootstrap": ("clip_bootstrap", "q_ensemble"),  # Doorknobs' two guards are one departure
+              "fit_patience": ("fit_patience", "updates_per_cycle")}  # the fitting schedule is one
     grouped = {f for fields in groups.values() for f in fields}
     fields = [f for f in theirs if f != "preset" and f not in grouped] + list(groups)
     out = {}

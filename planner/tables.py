@@ -199,10 +199,15 @@ def host_lookup(uid: jax.Array, key: jax.Array, ask: jax.Array):
     return jax.pure_callback(_host_decide, shapes, uid, key, ask, vmap_method="expand_dims")
 
 
-def batched_plan_lookup(tables: PlanTable, keys: jax.Array, need: jax.Array) -> PlanLookup:
-    """Look up every episode of a batch; call the host planner only if some needed state is missing."""
+def batched_plan_lookup(tables: PlanTable, keys: jax.Array, need: jax.Array, host: bool = True) -> PlanLookup:
+    """Look up every episode of a batch; call the host planner only if some needed state is missing.
+    Without `host` a missing state is left unanswered (not found) and only reported in `miss`: a program
+    without host callbacks, which JAX's persistent cache can keep (the caller redoes the work with the
+    host when a miss was reported)."""
     plan = jax.vmap(table_lookup)(tables, keys)
     miss = need & ~plan.found
+    if not host:
+        return plan.replace(miss=miss)
 
     def ask_host(_):
         found, op, nxt = host_lookup(tables.uid, keys, miss)

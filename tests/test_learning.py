@@ -279,13 +279,33 @@ def tiny_twice():
 
 
 def test_the_cycle_compiles_once_for_every_cycle_and_run(tiny_twice):
-    """No recompilation between cycles (the persistent cache cannot hide one: the cycle holds the planner's
-    host callback, which JAX never writes to it), and the learners keep their seed layout."""
+    """No recompilation (nor loading from the persistent cache) between cycles, the cycle without the
+    host planner serves every cycle of these tasks (their tables hold every state they meet), and the
+    learners keep their seed layout."""
     _, seeds, cycle, runs, compiled = tiny_twice
     assert compiled[0].compiles >= 1 and compiled[0].compile_s > 0
     assert all(r.compiles == 0 and r.traces == 0 for r in compiled[1:]), [r.compiles for r in compiled]
-    assert cycle._run._cache_size() == 1  # one dispatch entry
+    assert cycle._tables_only._cache_size() == 1 and cycle._with_host is None  # one dispatch entry
     assert all(x.sharding.is_equivalent_to(seeds.sharding, x.ndim) for x in jax.tree.leaves(runs[-1][0]))
+
+
+def test_a_cycle_meeting_a_state_missing_from_a_table_runs_again_with_the_host_planner(tiny_twice):
+    """Tables cut to 3 states: the cycle without the host planner reports misses, so the cycle is run again
+    from the same learners with it, and gives what the whole tables gave (the host plans as the tables)."""
+    import dataclasses
+    from planner.tables import compile_task, stack_tables
+    setup, seeds, _, ((_, history), _), _ = tiny_twice
+    cut = lambda batch: dataclasses.replace(batch, arrays=batch.arrays.replace(
+        tables=stack_tables([compile_task(batch.env, spec, max_states=3) for spec in batch.specs])))
+    truncated = dataclasses.replace(setup)
+    truncated.__dict__.update(train=cut(setup.train), test=cut(setup.test))  # Setup's cached task batches
+    cycle = Cycle(truncated, seeds)
+    learners, metrics = cycle(seeds.place(setup.init_learners()))
+    metrics = jax.tree.map(np.asarray, metrics)
+    assert cycle._with_host is not None and (metrics.table_misses > 0).all()
+    for field in ("test_solve_rate", "train_success_rate", "train_env_steps", "test_env_steps", "train_decisions"):
+        np.testing.assert_array_equal(getattr(metrics, field), getattr(history[0], field))
+    np.testing.assert_allclose(metrics.loss, history[0].loss, rtol=1e-4)
 
 
 def test_the_same_seeds_give_identical_metrics_twice(tiny_twice):

@@ -200,3 +200,40 @@ def test_minmax_scaling_of_a_split_full_state_equals_scaling_the_whole_input():
     variables = {**params, "norm": norm}
     np.testing.assert_allclose(dqn.net.apply(variables, parts), dqn.net.apply(variables, whole), rtol=2e-4, atol=1e-5)
     assert whole.shape[-1] == width and encode(dqn.env, full, skill, param).shape == whole.shape
+
+
+def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_restores_the_best_weights():
+    """fit_until_no_better against the same rule written out: updates until `fit_patience` in a row found
+    no lower minibatch loss (at most updates_per_cycle), then the weights that scored the lowest loss."""
+    from jaxbridge.learn.dqn import fit_until_no_better, relabel, update_step
+    from jaxbridge.learn.online import Cycle
+    from jaxbridge.learn.replay import sample_indices
+    config = TrainConfig.for_env("light_switch_door", "authors", num_seeds=1, fit_patience=20, updates_per_cycle=400)
+    setup = make_setup(config)
+    cycle = Cycle(setup)
+    learners, _ = cycle(cycle.seeds.place(setup.init_learners()))  # one cycle: a filled buffer
+    learner = jax.tree.map(lambda x: x[0], cycle.seeds.unpad(learners))
+    assert learner.buffer.size > 0 and config.fit_patience < int(learner.updates) <= config.updates_per_cycle
+    dqn, hyper = setup.dqn, setup.dqn.hyper
+    targets = relabel(dqn, learner, jax.random.key(3), None, hyper)
+    fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn, l, targets, None, hyper))(learner)
+
+    step = jax.jit(lambda l, index: update_step(dqn, l, targets, index, None, hyper))
+    current, best, best_loss, since_best, done = learner, learner.params, np.inf, 0, 0
+    while done < config.updates_per_cycle and since_best < config.fit_patience:
+        key, k_sample = jax.random.split(current.key)
+        updated, (loss, _) = step(current.replace(key=key), sample_indices(current.buffer, k_sample, config.batch_size))
+        if float(loss) < best_loss:
+            best, best_loss, since_best = current.params, float(loss), 0
+        else:
+            since_best += 1
+        current, done = updated, done + 1
+    assert int(fitted.updates - learner.updates) == done and config.fit_patience <= done < config.updates_per_cycle
+    for restored, expected, last in zip(jax.tree.leaves(fitted.params), jax.tree.leaves(best),
+                                        jax.tree.leaves(current.params)):
+        np.testing.assert_allclose(restored, expected, rtol=1e-4, atol=1e-6)
+    assert not all(np.allclose(a, b) for a, b in zip(jax.tree.leaves(fitted.params), jax.tree.leaves(current.params)))
+    capped = dataclasses.replace(config, fit_patience=10**6, updates_per_cycle=37)
+    dqn_capped = make_setup(capped).dqn
+    fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn_capped, l, targets, None, hyper))(learner)
+    assert int(fitted.updates - learner.updates) == 37

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 # stored whole observations and load with it off); 4: `preset`, `test_protocol`, `activation`,
 # `target_init`, `reset_optimizer`, `explore_ground_operators` (older runs were the jaxbridge preset,
 # which their defaults are); 5: `output_init` (older runs started their output layer at zero); 6:
-# `env_quirks`, `normalise` (older runs had none)
+# `env_quirks`, `normalise`, `fit_patience` (older runs had none of them)
 CONFIG_VERSION = 6
 
 
@@ -25,7 +25,8 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
           "polyak_tau": (0, 1, False), "call_planner_bonus": (0, None, True), "epsilon_start": (0, 1, True),
           "epsilon_end": (0, 1, True), "epsilon_decay": (0, None, True), "num_seeds": (1, None, True),
           "cycles": (1, None, True), "episodes_per_cycle": (1, None, True), "train_steps": (1, None, True),
-          "num_test_tasks": (1, None, True), "updates_per_cycle": (0, None, True), "batch_size": (1, None, True),
+          "num_test_tasks": (1, None, True), "updates_per_cycle": (0, None, True), "fit_patience": (0, None, True),
+          "batch_size": (1, None, True),
           "q_ensemble": (1, None, True), "n_sample": (1, None, True), "n_target_sample": (1, None, True),
           "buffer_capacity": (1, None, True), "checkpoint_every": (1, None, True), "seed_block": (1, None, True),
           "first_seed": (0, None, True)}
@@ -67,6 +68,10 @@ class TrainConfig:
     updates_per_cycle: int = 1000
     """Double-DQN minibatch updates after each cycle's episodes (the authors: up to 100,000 iterations with
     early stopping, about 5k-21k per cycle; see docs/DESIGN.md)."""
+    fit_patience: int = 0
+    """0: every cycle makes exactly `updates_per_cycle` updates (ours). N > 0: the authors' early-stopping
+    fit: updates until N in a row found no lower minibatch loss, at most `updates_per_cycle` (theirs:
+    N = 5000, at most 100,000), then the weights that scored the lowest loss are restored."""
     batch_size: int = 256
     """Minibatch size (the paper: 64; 256 learns more reliably at the same number of updates, see
     docs/RESULTS.md)."""

@@ -280,10 +280,10 @@ def no_plan(num_episodes: int, words: int) -> PlanLookup:
                       next_key=jnp.zeros((num_episodes, words), jnp.uint32), miss=jnp.zeros(num_episodes, bool))
 
 
-@partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls", "shared_params"))
+@partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls", "shared_params", "host_planner"))
 def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArrays, keys: jax.Array,
             max_steps: int, record: bool = False, controls: Controls = Controls(), shared_params: bool = False,
-            groups: jax.Array | None = None):
+            groups: jax.Array | None = None, host_planner: bool = True):
     """Run the meta-policy on a batch of B episodes for at most `max_steps` env steps.
 
     `batch` (the episodes' tasks, plan tables and horizons), keys (one per episode) and bridge_params (None,
@@ -291,7 +291,9 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArra
     episode uses it (one network: its layers multiply all episodes at once, not one matrix per episode).
     `controls` picks the approach's parts of the meta-policy. `groups` (int[B], default: one group) says
     which episodes run concurrently in one world, for what an env shares between them
-    (`share_between_episodes`: one seed's episodes of a cycle phase).
+    (`share_between_episodes`: one seed's episodes of a cycle phase). Without `host_planner`, a state
+    missing from a plan table is not planned on the host (the episode finds no plan); it is only counted
+    in `table_misses`, and the results are then not the meta-policy's (learn/online.Cycle reruns them).
     Returns EpisodeResult[B] and, with `record`, StepRecord[max_steps, B].
     """
     tasks, tables, horizons = batch.tasks, batch.tables, batch.horizons
@@ -307,7 +309,7 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArra
         param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]
         episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
         if controls.planner:
-            plan = batched_plan_lookup(tables, packed, need_plan)
+            plan = batched_plan_lookup(tables, packed, need_plan, host_planner)
         else:  # pure RL: the control never returns to a planner, nothing is looked up
             plan = no_plan(num_episodes, packed.shape[-1])
         stuck_before = episodes.stuck_events

@@ -233,6 +233,34 @@ def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array
     return learner, (loss, q_abs_max)
 
 
+def fit_until_no_better(dqn: DQN, learner: Learner, targets: jax.Array, task: TaskPart | None,
+                        hyper: Hyper) -> tuple[Learner, jax.Array, jax.Array]:
+    """The authors' fit (reference/method.md §5): minibatch updates until `fit_patience` of them in a row
+    found no lower minibatch loss, or `updates_per_cycle` were made, then the weights that scored the
+    lowest loss are restored (those a minibatch was evaluated with, before its step). Each seed stops on
+    its own (a while loop); none runs while the buffer is empty. Returns as `learn`."""
+    config = dqn.config
+
+    def more(carry):
+        learner, _, _, since_best, done, _, _ = carry
+        return (learner.buffer.size > 0) & (done < config.updates_per_cycle) & (since_best < config.fit_patience)
+
+    def update(carry):
+        learner, best_params, best_loss, since_best, done, loss_sum, q_abs = carry
+        key, k_sample = jax.random.split(learner.key)
+        index = sample_indices(learner.buffer, k_sample, config.batch_size)
+        updated, (loss, q_abs_max) = update_step(dqn, learner.replace(key=key), targets, index, task, hyper)
+        better = loss < best_loss
+        best_params = jax.tree.map(lambda p, b: jnp.where(better, p, b), learner.params, best_params)
+        return (updated, best_params, jnp.where(better, loss, best_loss), jnp.where(better, 0, since_best + 1),
+                done + 1, loss_sum + loss, jnp.maximum(q_abs, q_abs_max))
+
+    start = (learner, learner.params, jnp.float32(jnp.inf), jnp.int32(0), jnp.int32(0), jnp.float32(0.0),
+             jnp.float32(0.0))
+    learner, best_params, _, _, done, loss_sum, q_abs = jax.lax.while_loop(more, update, start)
+    return learner.replace(params=best_params), loss_sum / jnp.maximum(done, 1).astype(jnp.float32), q_abs
+
+
 def minibatch_indices(config: TrainConfig, learner: Learner) -> tuple[jax.Array, jax.Array]:
     """(the key after the updates, int32[updates_per_cycle, batch_size]: each update's buffer slots).
 
@@ -278,6 +306,8 @@ def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None,
 
     if config.updates_per_cycle == 0:
         return learner, jnp.float32(0.0), jnp.float32(0.0)
+    if config.fit_patience:
+        return fit_until_no_better(dqn, learner, targets, task, hyper)
 
     ready = learner.buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
 

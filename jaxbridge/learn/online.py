@@ -60,9 +60,11 @@ def _by_seed(tree, seeds: int):
     return jax.tree.map(lambda x: jnp.reshape(x, (seeds, -1) + x.shape[1:]), tree)
 
 
-def make_seed_cycle(setup: Setup) -> Callable:
+def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     """One seed's cycle: (learner, its training TaskArrays, its test TaskArrays, its Hyper) -> (learner,
-    CycleMetrics of scalars). The same computation for every seed and setting."""
+    CycleMetrics of scalars). The same computation for every seed and setting. Without `host_planner`
+    its rollouts leave states missing from the plan tables unplanned (meta_policy.rollout): exact only
+    where the metrics report no table miss."""
     config, approach, train, test = setup.config, setup.approach, setup.train, setup.test
     controls = approach.controls
     # The task batches are shared by every approach and config of an experiment; the quirks are the config's.
@@ -93,7 +95,8 @@ def make_seed_cycle(setup: Setup) -> Callable:
         eps = epsilon(hyper, learner.decisions)
         explore = bridge_params(learner.online, eps, episodes)
         result, records = rollout(train_env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
-                                  config.train_steps, record=approach.learns, controls=controls, shared_params=shared)
+                                  config.train_steps, record=approach.learns, controls=controls, shared_params=shared,
+                                  host_planner=host_planner)
         decisions = result.bridge_decisions.sum()
 
         if approach.learns:
@@ -115,7 +118,7 @@ def make_seed_cycle(setup: Setup) -> Callable:
         # 4. Greedy evaluation on the seed's test tasks.
         greedy = bridge_params(learner.online, jnp.float32(0.0), num_tests)
         tested, _ = rollout(test_env, test_bridge, greedy, test_tasks, jax.random.split(k_test, num_tests),
-                            test.max_steps, controls=controls, shared_params=shared)
+                            test.max_steps, controls=controls, shared_params=shared, host_planner=host_planner)
 
         metrics = CycleMetrics(
             test_solve_rate=tested.success.mean(), train_success_rate=result.success.mean(),
@@ -150,11 +153,23 @@ class Cycle:
         self._inputs = self.seeds.place((*tasks, hypers))
         self._real = self.seeds.real()
         # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical
-        # fault during a cycle can still checkpoint the last good one.
+        # fault during a cycle can still checkpoint the last good one (and a cycle can be run again).
         # out_shardings: the learners come back laid out as they went in. Left to XLA, a 1-device mesh
         # returns some leaves replicated (PartitionSpec()) instead of split over the seed axis: the same
         # memory, but a different jit cache key, so the second cycle compiled the whole program again.
-        self._run = jax.jit(self.seeds.map_seeds(make_seed_cycle(setup)), out_shardings=self.seeds.sharding)
+        self._compile = lambda host_planner: jax.jit(self.seeds.map_seeds(make_seed_cycle(setup, host_planner)),
+                                                     out_shardings=self.seeds.sharding)
+        # First without the host planner: a program without host callbacks, which JAX's persistent cache
+        # keeps, so a later process (a resumed run, the next experiment) need not compile it again.
+        self._tables_only = self._compile(False)
+        self._with_host = None  # compiled on the first cycle that meets a state missing from a table
 
     def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
-        return self._run(self._real, learners, *self._inputs)
+        updated, metrics = self._tables_only(self._real, learners, *self._inputs)
+        if not np.asarray(self.seeds.unpad(metrics.table_misses)).any():
+            return updated, metrics
+        # Some episode needed the host planner: the same cycle again from the same state, with it (every
+        # process sees the same gathered metrics, so all take this branch together).
+        if self._with_host is None:
+            self._with_host = self._compile(True)
+        return self._with_host(self._real, learners, *self._inputs)

@@ -7,10 +7,10 @@ anything (the cache is set up at the first compilation). A `JAX_COMPILATION_CACH
 environment (the tests set one) is left as it is.
 
 What the cache cannot hold: JAX does not write programs that contain host callbacks (their Python
-function pointers differ between processes). The training cycle and every meta-policy rollout contain
-one, the host planner behind the plan tables (planner/tables.py, a `jax.pure_callback` taken only on a
-table miss), so those are compiled afresh in every process; the cache serves the smaller programs
-around them (docs/PERFORMANCE.md).
+function pointers differ between processes), such as the host planner behind the plan tables
+(planner/tables.py, a `jax.pure_callback` taken only on a table miss). So the training cycle is first
+compiled without it (learn/online.Cycle), and cached; only a cycle that meets a state missing from a
+table is run again with it. Evaluation rollouts keep it and are compiled in every process.
 """
 from __future__ import annotations
 
@@ -58,8 +58,8 @@ def enable(on: bool = True, path: Path | None = None) -> str | None:
 
 
 HELP = ("do not use the persistent compilation cache (default: on, in $JAXBRIDGE_CACHE_DIR, else "
-        "$XDG_CACHE_HOME/jaxbridge/jax or ~/.cache/jaxbridge/jax; it saves the compilation of the small "
-        "programs in later runs; the training cycle and rollouts hold a host callback and are always compiled)")
+        "$XDG_CACHE_HOME/jaxbridge/jax or ~/.cache/jaxbridge/jax; a later run of the same shapes loads its "
+        "programs instead of compiling them, the training cycle included)")
 
 
 class CompileEvents:
