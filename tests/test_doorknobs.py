@@ -192,6 +192,11 @@ def test_features_see_the_nearest_knob_of_the_robots_room_and_the_displacement()
     # Offsets and displacement come larger first, whatever the door's orientation (|dy| > |dx| here).
     np.testing.assert_allclose(f, [0.095, 0.07, 0.0, 0.75, 0.0, 0.45, 0.405], atol=1e-6)
     assert f.shape == (ENV.num_features,)
+    # The authors' order (the `raw_offsets` quirk): (|dx|, |dy|) as they are.
+    raw = ENV.with_quirks(("raw_offsets",))
+    np.testing.assert_allclose(raw.features(moved, stuck), [0.095, 0.07, 0.0, 0.75, 0.0, 0.405, 0.45], atol=1e-6)
+    np.testing.assert_allclose(raw.features(moved.replace(robot=jnp.array([1.03, 0.45])), stuck),
+                               [0.025, 0.07, 0.0, 0.75, 0.0, 0.475, 0.45], atol=1e-6)
 
 
 def test_full_state_is_capacity_independent():

@@ -31,7 +31,9 @@ def test_the_authors_preset_reaches_the_learner_and_its_bridge(env):
     expected = {**AUTHORS, "n_sample": AUTHORS_N_SAMPLE[env], "preset": "authors"}
     assert setup.dqn.net.normalise and setup.init_learners().norm is not None  # min-max scaling
     assert {k: getattr(learner_config, k) for k in expected} == expected
-    assert setup.bridge(setup.test_env).n_sample == AUTHORS_N_SAMPLE[env]
+    assert setup.bridge(setup.test_env).n_sample == AUTHORS_N_SAMPLE[env] and not setup.bridge(setup.test_env).stratified
+    assert set(setup.train_env.quirks) == set(config.env_quirks)  # every env-level quirk it has, switched on
+    assert all(getattr(setup.train_env, q) and getattr(setup.test_env, q) for q in config.env_quirks)
     assert setup.dqn.net.ensemble == 1
     assert config.to_dict()["preset"] == "authors"  # config.json records it with every resolved value
 
@@ -237,3 +239,20 @@ def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_r
     dqn_capped = make_setup(capped).dqn
     fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn_capped, l, targets, None, hyper))(learner)
     assert int(fitted.updates - learner.updates) == 37
+
+
+@pytest.mark.parametrize("stratified", [True, False])
+def test_parameter_samples_are_stratified_or_independent(stratified):
+    """Ours: the j-th of a skill's n samples lies in the j-th n-quantile of its range; the authors': n
+    independent uniforms (which leave some quantiles empty)."""
+    from jaxbridge.learn.q_bridge import candidate_skills, sample_candidates
+    env = env_class("light_switch_door")()
+    skills = candidate_skills(env, 100)
+    params = np.asarray(sample_candidates(env, skills, jax.random.key(0), stratified))
+    for k, spec in enumerate(env.skills):
+        if spec.param_low == spec.param_high:
+            continue
+        u = (params[skills == k] - spec.param_low) / (spec.param_high - spec.param_low)
+        strata = np.floor(u * len(u)).astype(int)
+        assert np.array_equal(strata, np.arange(len(u))) == stratified
+        assert ((0 <= u) & (u < 1)).all()

@@ -124,6 +124,7 @@ class Doorknobs(NoveltyEnv):
     """The env at a fixed capacity: maps of at most `map_size` x `map_size` rooms."""
 
     map_size: int = TEST_MAP_SIZE
+    raw_offsets: bool = False
 
     name = "doorknobs"
     skills = (SkillSpec("MoveToDoor"), SkillSpec("OpenDoor", -1.0, 1.0), SkillSpec("MoveThroughDoor"))
@@ -138,7 +139,9 @@ class Doorknobs(NoveltyEnv):
     # Chosen on the tuning seeds (docs/RESULTS.md, Doorknobs): the CallPlanner bonus breaks the tie with walking
     # through the opened door; fewer updates and the clipped, twin-network targets stop the Q drift.
     train_defaults = {"call_planner_bonus": 0.5, "updates_per_cycle": 150, "clip_bootstrap": True, "q_ensemble": 2}
-    authors_defaults = {"n_sample": 10}
+    authors_defaults = {"n_sample": 10, "env_quirks": ("raw_offsets",)}
+    quirks = {"raw_offsets": "the features' knob and displacement offsets as (|dx|, |dy|), the authors' order, "
+              "instead of each pair larger first (envs.md §3.8)"}
     # The full-state ablations (2027 inputs) run only when asked (docs/PERFORMANCE.md).
     default_approaches = ("ours", "no_callplanner", "random", "pure_planning")
     why_not_all = "their full state is 2027 values wide: all six take ~11 minutes on 2 cores, these four ~4"
@@ -288,10 +291,12 @@ class Doorknobs(NoveltyEnv):
         dy = jnp.abs(task.door_rect[doors, 1] - state.robot[1])
         k = jnp.argmin(jnp.where(candidates, dx * dx + dy * dy, jnp.inf))
         door = doors[k]
-        knob = jnp.stack([jnp.maximum(dx[k], dy[k]), jnp.minimum(dx[k], dy[k]), state.knob_rot[door],
-                          task.knob_target[door], state.door_open[door].astype(jnp.float32)])
+        offset = jnp.stack([dx[k], dy[k]])
         moved = jnp.abs(state.robot - stuck_state.robot)
-        moved = jnp.stack([jnp.max(moved), jnp.min(moved)])
+        if not self.raw_offsets:  # the `raw_offsets` quirk keeps the authors' (|dx|, |dy|)
+            offset, moved = jnp.stack([jnp.max(offset), jnp.min(offset)]), jnp.stack([jnp.max(moved), jnp.min(moved)])
+        knob = jnp.concatenate([offset, jnp.stack([state.knob_rot[door], task.knob_target[door],
+                                                   state.door_open[door].astype(jnp.float32)])])
         return jnp.concatenate([jnp.where(jnp.any(candidates), knob, 0.0), moved])
 
     @property

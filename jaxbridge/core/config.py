@@ -9,7 +9,7 @@ from dataclasses import dataclass
 # stored whole observations and load with it off); 4: `preset`, `test_protocol`, `activation`,
 # `target_init`, `reset_optimizer`, `explore_ground_operators` (older runs were the jaxbridge preset,
 # which their defaults are); 5: `output_init` (older runs started their output layer at zero); 6:
-# `env_quirks`, `normalise`, `fit_patience` (older runs had none of them)
+# `env_quirks`, `normalise`, `fit_patience`, `param_samples` (older runs had none of them: their defaults)
 CONFIG_VERSION = 6
 
 
@@ -33,7 +33,8 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
 
 # The string options and what they may be.
 CHOICES = {"polyak_per": ("update", "decision"), "activation": ("leaky_relu", "relu"),
-           "target_init": ("copy", "apart"), "output_init": ("zero", "uniform"), "normalise": ("none", "minmax")}
+           "target_init": ("copy", "apart"), "output_init": ("zero", "uniform"), "normalise": ("none", "minmax"),
+           "param_samples": ("stratified", "iid")}
 
 
 @dataclass(frozen=True)
@@ -114,6 +115,10 @@ class TrainConfig:
     n_sample: int = 100
     """Parameter samples per skill in the greedy argmax (the authors: 100 for Light Switch Door, 10 for
     Doorknobs and Coffee; ours: 100 everywhere)."""
+    param_samples: str = "stratified"
+    """How the n parameter samples of a skill in an argmax (greedy and TD targets) are drawn: "stratified"
+    (ours: the j-th uniform in the j-th n-quantile of the range, so a narrow good interval is never
+    missed by chance) or "iid" (the authors': independent uniforms)."""
     n_target_sample: int = 10
     """Parameter samples per skill when the online net picks the next action of a TD target (the
     authors: 1, which rarely finds a key's +-0.1 window and so undervalues the states before it)."""

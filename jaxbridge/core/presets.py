@@ -30,6 +30,7 @@ AUTHORS = {
     "normalise": "minmax",  # per-cycle min-max scaling of the network's inputs and targets
     "fit_patience": 5000,  # fit until 5,000 updates bring no lower minibatch loss ...
     "updates_per_cycle": 100_000,  # ... or 100,000 were made; the best weights restored
+    "param_samples": "iid",  # independent parameter samples in the argmax
 }
 
 

@@ -28,11 +28,12 @@ class Approach:
         return self.bridge == "q"
 
     def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int,
-                    explore_ground_operators: bool = False) -> Bridge:
+                    explore_ground_operators: bool = False, stratified: bool = True) -> Bridge:
         """The approach's bridge (equal arguments give equal bridges: one compiled rollout serves them);
-        `explore_ground_operators`: random draws over ground operators (RandomBridge)."""
+        `explore_ground_operators`: random draws over ground operators (RandomBridge); `stratified`: the
+        greedy argmax's parameter samples (q_bridge.sample_candidates)."""
         if self.bridge == "q":
-            return QBridge(env, net, n_sample, explore_ground_operators)
+            return QBridge(env, net, n_sample, explore_ground_operators, stratified)
         if self.bridge == "random":
             return RandomBridge(env, explore_ground_operators)
         return PurePlanningBridge(env)

@@ -146,7 +146,9 @@ def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key
     hyper = dqn.hyper if hyper is None else hyper
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
-    best, _ = jax.vmap(lambda f, g, k, i: best_candidate(env, net, params, f, g, skills, k, at_task(task, i)))(
+    stratified = config.param_samples == "stratified"
+    best, _ = jax.vmap(lambda f, g, k, i: best_candidate(env, net, params, f, g, skills, k, at_task(task, i),
+                                                         stratified))(
         batch.next_features, batch.next_num_ground, keys, batch.task)
     next_q = net.apply(target_params, batch_input(env, batch.next_features, best.skill, best.param,
                                                   at_task(task, batch.task)))

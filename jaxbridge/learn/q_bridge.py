@@ -228,25 +228,26 @@ def candidate_skills(env: NoveltyEnv, n_sample: int) -> np.ndarray:
     return np.array(sum(([k] * c for k, c in enumerate(counts)), []) + [env.num_skills], np.int32)
 
 
-def sample_candidates(env: NoveltyEnv, skills: np.ndarray, key: jax.Array) -> jax.Array:
+def sample_candidates(env: NoveltyEnv, skills: np.ndarray, key: jax.Array, stratified: bool = True) -> jax.Array:
     """float32[C]: a parameter for each candidate from its skill's sampler (0 for CallPlanner).
 
     Stratified: the j-th of a skill's n candidates is uniform in the j-th n-quantile of the sampler's
     range. Each sample is still uniform over the range when its stratum is picked at random, but the n
     samples cover the range evenly, so a narrow good interval (a door key's +-0.1) is never missed by
-    chance. (The authors drew the n samples independently.)"""
+    chance. Without `stratified`, the n samples are independent (the authors')."""
     _, first, counts = np.unique(skills, return_index=True, return_counts=True)
     stratum = np.arange(len(skills)) - np.repeat(first, counts)
     size = np.repeat(counts, counts)
-    u = (stratum + jax.random.uniform(key, skills.shape)) / size
+    u = (stratum + jax.random.uniform(key, skills.shape)) / size if stratified else jax.random.uniform(key, skills.shape)
     is_env_skill = skills < env.num_skills
     return jnp.where(is_env_skill, env.param_from_uniform(np.minimum(skills, env.num_skills - 1), u), 0.0)
 
 
 def best_candidate(env: NoveltyEnv, net: QNetwork, q_params: Any, features: jax.Array, num_ground: jax.Array,
-                   skills: np.ndarray, key: jax.Array, task: TaskPart | None = None) -> tuple[BridgeAction, jax.Array]:
+                   skills: np.ndarray, key: jax.Array, task: TaskPart | None = None,
+                   stratified: bool = True) -> tuple[BridgeAction, jax.Array]:
     """argmax over the applicable candidates of Q(features, skill, param); also returns the max Q."""
-    params = sample_candidates(env, skills, key)
+    params = sample_candidates(env, skills, key, stratified)
     q = net.apply(q_params, candidates_input(env, features, jnp.asarray(skills), params, task))
     q = jnp.where(num_ground[skills] > 0, q, -jnp.inf)
     best = jnp.argmax(q)
@@ -268,11 +269,13 @@ class QBridge:
     net: QNetwork
     n_sample: int
     explore_ground_operators: bool = False  # epsilon's draw: over ground operators, not skills (RandomBridge)
+    stratified: bool = True  # the candidates' parameters: stratified, or independent (sample_candidates)
 
     def __call__(self, params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
         k_explore, k_random, k_greedy = jax.random.split(key, 3)
         skills = candidate_skills(self.env, self.n_sample)
-        greedy, _ = best_candidate(self.env, self.net, params.q, obs.features, obs.num_ground, skills, k_greedy)
+        greedy, _ = best_candidate(self.env, self.net, params.q, obs.features, obs.num_ground, skills, k_greedy,
+                                   stratified=self.stratified)
         explore = jax.random.uniform(k_explore) < params.epsilon
         random = RandomBridge(self.env, self.explore_ground_operators)(None, obs, k_random)
         return tree_where(explore, random, greedy)

@@ -42,7 +42,9 @@ class Setup:
 
     def bridge(self, env: NoveltyEnv) -> Bridge:
         """The approach's bridge on `env` (equal arguments give equal bridges: one compilation)."""
-        return self.approach.make_bridge(env, self.dqn.net, self.config.n_sample, self.config.explore_ground_operators)
+        config = self.config
+        return self.approach.make_bridge(env, self.dqn.net, config.n_sample, config.explore_ground_operators,
+                                         config.param_samples == "stratified")
 
     def init_learners(self) -> Learner:
         """One learner per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""
