@@ -61,6 +61,9 @@ def parse_args(argv):
     p.add_argument("--preset", choices=list(PRESETS), default=None,
                    help="the values a run starts from: " + "; ".join(f"{k}: {v}" for k, v in PRESETS.items())
                         + " (flags below override it; config.json records every resolved value) (default: jaxbridge)")
+    p.add_argument("--env-quirks", metavar="NAME[,NAME]", type=lambda t: tuple(n for n in t.split(",") if n and n != "none"),
+                   help="behaviours of the authors' envs to switch back on (the env's quirks, e.g. Coffee's "
+                        "shared_repeat_flag, Doorknobs' raw_offsets), or none (default: the preset's)")
     p.add_argument("--test-protocol", metavar="NAME",
                    help="which of the env's test-task distributions to evaluate on, e.g. authors: Coffee's 4 cups "
                         "with horizon 100, Light Switch Door's fixed horizon 30 (default: the preset's, else the "

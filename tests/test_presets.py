@@ -71,6 +71,10 @@ def test_flags_override_the_preset_and_bad_names_are_refused():
         make_config({"env": "doorknobs", "test_protocol": "authors"})  # Doorknobs' authors' tasks are ours
     with pytest.raises(ValueError, match="unknown preset"):
         preset_values("theirs", env_class("coffee"))
+    assert make_config({"env": "coffee", "preset": "authors", "env_quirks": ()})[0].env_quirks == ()  # --env-quirks none
+    assert make_config({"env": "doorknobs", "env_quirks": ("raw_offsets",)})[0].env_quirks == ("raw_offsets",)
+    with pytest.raises(UsageError, match="doorknobs has raw_offsets"):
+        make_config({"env": "doorknobs", "env_quirks": ("shared_repeat_flag",)})
 
 
 # ---- the authors' learner options do what they say ------------------------------------------------

@@ -18,7 +18,7 @@ from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.stats import cell_text
 
 # train.py flags that set the run's config (flag name = config field); --resume takes the saved config.
-CONFIG_FLAGS = ("env", "preset", "test_protocol", "num_seeds", "first_seed", "cycles", "episodes_per_cycle",
+CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "num_seeds", "first_seed", "cycles", "episodes_per_cycle",
                 "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus", "checkpoint_every", "seed_block")
 
 
@@ -32,6 +32,10 @@ def make_config(flags: dict) -> tuple[TrainConfig, type]:
         config = TrainConfig(env=spec, **{**preset_values(given.pop("preset", TrainConfig.preset), env_cls), **given})
     except ValueError as err:  # a value out of its range, e.g. a negative bonus
         raise UsageError(str(err)) from None
+    unknown = [q for q in config.env_quirks if q not in env_cls.quirks]
+    if unknown:
+        raise UsageError(f"--env-quirks {unknown[0]}: {env_cls.name} has "
+                         f"{', '.join(f'{k} ({v})' for k, v in env_cls.quirks.items()) or 'no quirks'}")
     if config.test_protocol not in env_cls.test_protocols:
         raise UsageError(f"--test-protocol {config.test_protocol!r}: {env_cls.name} has "
                          f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}")

@@ -14,8 +14,8 @@ import typing
 from jaxbridge.core.config import LEAF_FIELDS, TrainConfig
 
 # What an experiment is rather than how it learns: not sweepable (use separate experiments).
-NOT_SWEPT = ("env", "approach", "preset", "test_protocol", "num_seeds", "first_seed", "cycles", "seed_block",
-             "checkpoint_every")
+NOT_SWEPT = ("env", "approach", "preset", "env_quirks", "test_protocol", "num_seeds", "first_seed", "cycles",
+             "seed_block", "checkpoint_every")
 FIELDS = {f.name: f for f in dataclasses.fields(TrainConfig)}
 SWEEPABLE = tuple(name for name in FIELDS if name not in NOT_SWEPT)
 
