@@ -206,6 +206,13 @@ def test_minmax_scaling_of_a_split_full_state_equals_scaling_the_whole_input():
     variables = {**params, "norm": norm}
     np.testing.assert_allclose(dqn.net.apply(variables, parts), dqn.net.apply(variables, whole), rtol=2e-4, atol=1e-5)
     assert whole.shape[-1] == width and encode(dqn.env, full, skill, param).shape == whole.shape
+    from jaxbridge.learn.dqn import fit_scaling  # the task's constants: shifted to 0, scale 1
+    buffer = learner.buffer.replace(size=jnp.int32(3), data=learner.buffer.data.replace(
+        features=learner.buffer.data.features.at[:3].set(full[:, np.array(split.varying)])))
+    fitted = fit_scaling(dqn, buffer, jnp.zeros(buffer.capacity), task)
+    np.testing.assert_array_equal(fitted["x_shift"][np.array(split.constant)], task.values[0])
+    np.testing.assert_array_equal(fitted["x_scale"][np.array(split.constant)], 1.0)
+    np.testing.assert_allclose(fitted["x_shift"][np.array(split.varying)], full[:, np.array(split.varying)].min(0))
 
 
 def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_restores_the_best_weights():

@@ -194,12 +194,11 @@ def fit_scaling(dqn: DQN, buffer: ReplayBuffer, targets: jax.Array, task: TaskPa
         return (jnp.min(jnp.where(stored[:, None], x, jnp.inf), axis=0),
                 jnp.max(jnp.where(stored[:, None], x, -jnp.inf), axis=0))
     (low_f, high_f), (low_a, high_a) = bounds(data.features), bounds(action)
-    if task is not None:  # the constant entries are the training tasks' values
-        width = task.split.width
-        low_f = jnp.zeros(width).at[np.array(task.split.varying)].set(low_f).at[np.array(task.split.constant)].set(
-            jnp.min(task.values, axis=0))
-        high_f = jnp.zeros(width).at[np.array(task.split.varying)].set(high_f).at[np.array(task.split.constant)].set(
-            jnp.max(task.values, axis=0))
+    if task is not None:  # a split observation: its task-constant entries are the training tasks' values
+        split = task.split
+        whole = lambda varying, constant: (jnp.zeros(split.width).at[np.array(split.varying)].set(varying)
+                                           .at[np.array(split.constant)].set(constant))
+        low_f, high_f = whole(low_f, jnp.min(task.values, axis=0)), whole(high_f, jnp.max(task.values, axis=0))
     low, high = jnp.concatenate([low_f, low_a]), jnp.concatenate([high_f, high_a])
     (y_low,), (y_high,) = bounds(targets[:, None])
     empty = buffer.size == 0
