@@ -51,9 +51,10 @@ def primitives(closed_jaxpr) -> Counter:
     return counts
 
 
-def cycle_program(approach: str) -> Counter:
+def cycle_program(approach: str, host_planner: bool = True) -> Counter:
     setup = make_setup(replace(TINY, approach=approach))
-    return primitives(jax.make_jaxpr(Cycle(setup))(setup.init_learners()))
+    cycle = Cycle(setup)
+    return primitives(jax.make_jaxpr(lambda learners: cycle.run(learners, host_planner))(setup.init_learners()))
 
 
 def test_every_approach_is_registered_with_its_parts():
@@ -90,6 +91,7 @@ def test_maple_q_never_plans(tests_batch):
     # The host planner is not even part of Maple Q's program; it is part of ours.
     assert cycle_program("maple_q")["pure_callback"] == 0
     assert cycle_program("ours")["pure_callback"] > 0
+    assert cycle_program("ours", host_planner=False)["pure_callback"] == 0  # the program the cache keeps
 
 
 @pytest.mark.parametrize("approach", ["pure_planning", "random"])

@@ -38,12 +38,13 @@ def test_three_ctrl_c_exit_130_without_corrupting_anything(tmp_path):
 # ---- a full disk and a read-only filesystem -------------------------------------------------------------
 @pytest.fixture
 def small_disk(tmp_path):
-    """A 400 KB tmpfs at tmp_path/disk (mounting needs root, else the test is skipped)."""
+    """A 300 KB tmpfs at tmp_path/disk (mounting needs root, else the test is skipped): room for a
+    checkpoint or two of a small run, not for 40 cycles of them."""
     disk = tmp_path / "disk"
     disk.mkdir()
     if os.geteuid() != 0:
         pytest.skip("mounting a small tmpfs needs root")
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=400k", "tmpfs", str(disk)], capture_output=True).returncode:
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=300k", "tmpfs", str(disk)], capture_output=True).returncode:
         pytest.skip("this machine does not allow mounting a tmpfs")
     yield disk
     subprocess.run(["umount", "-l", str(disk)], capture_output=True)

@@ -157,7 +157,7 @@ class SkillMemory:
     with the env's `shared_repeat_flag` quirk (skills.remember_call); the dynamics never read it."""
 
     repeated: jax.Array  # bool: one of them was called twice in the same state
-    pick_seen: jax.Array  # float32[D]: the state vector PickJug last acted in (NaN: never)
+    pick_seen: jax.Array  # float32[D]: the state vector PickJug last acted in (inf: never)
     twist_seen: jax.Array  # float32[D]: the same for MoveToTwistJug
 
 
@@ -191,7 +191,7 @@ def task_arrays(spec: CoffeeTask, max_cups: int) -> Task:
 
 
 def reset(task: Task) -> State:
-    never = jnp.full(12 + task.cup_mask.shape[-1], jnp.nan, jnp.float32)
+    never = jnp.full(12 + task.cup_mask.shape[-1], jnp.inf, jnp.float32)  # no state vector holds inf
     return State(robot=jnp.asarray(ROBOT_INIT), jug_xy=task.jug_xy, jug_rot=jnp.float32(JUG_INIT_ROT),
                  jug_held=jnp.bool_(False), jug_filled=jnp.bool_(False), machine_on=jnp.bool_(False),
                  cup_liquid=jnp.zeros(task.cup_mask.shape, jnp.float32), task=task,

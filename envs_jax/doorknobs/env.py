@@ -291,12 +291,14 @@ class Doorknobs(NoveltyEnv):
         dy = jnp.abs(task.door_rect[doors, 1] - state.robot[1])
         k = jnp.argmin(jnp.where(candidates, dx * dx + dy * dy, jnp.inf))
         door = doors[k]
-        offset = jnp.stack([dx[k], dy[k]])
         moved = jnp.abs(state.robot - stuck_state.robot)
-        if not self.raw_offsets:  # the `raw_offsets` quirk keeps the authors' (|dx|, |dy|)
-            offset, moved = jnp.stack([jnp.max(offset), jnp.min(offset)]), jnp.stack([jnp.max(moved), jnp.min(moved)])
-        knob = jnp.concatenate([offset, jnp.stack([state.knob_rot[door], task.knob_target[door],
-                                                   state.door_open[door].astype(jnp.float32)])])
+        if self.raw_offsets:  # the authors' order, (|dx|, |dy|)
+            first, second = dx[k], dy[k]
+        else:
+            first, second = jnp.maximum(dx[k], dy[k]), jnp.minimum(dx[k], dy[k])
+            moved = jnp.stack([jnp.max(moved), jnp.min(moved)])
+        knob = jnp.stack([first, second, state.knob_rot[door], task.knob_target[door],
+                          state.door_open[door].astype(jnp.float32)])
         return jnp.concatenate([jnp.where(jnp.any(candidates), knob, 0.0), moved])
 
     @property

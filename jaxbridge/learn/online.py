@@ -164,12 +164,18 @@ class Cycle:
         self._tables_only = self._compile(False)
         self._with_host = None  # compiled on the first cycle that meets a state missing from a table
 
+    def run(self, learners: Learner, host_planner: bool) -> tuple[Learner, CycleMetrics]:
+        """One cycle by one of the two programs (traceable): without the host planner, exact only where
+        the metrics report no table miss; or with it."""
+        if host_planner and self._with_host is None:
+            self._with_host = self._compile(True)
+        program = self._with_host if host_planner else self._tables_only
+        return program(self._real, learners, *self._inputs)
+
     def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
-        updated, metrics = self._tables_only(self._real, learners, *self._inputs)
+        updated, metrics = self.run(learners, host_planner=False)
         if not np.asarray(self.seeds.unpad(metrics.table_misses)).any():
             return updated, metrics
         # Some episode needed the host planner: the same cycle again from the same state, with it (every
         # process sees the same gathered metrics, so all take this branch together).
-        if self._with_host is None:
-            self._with_host = self._compile(True)
-        return self._with_host(self._real, learners, *self._inputs)
+        return self.run(learners, host_planner=True)
