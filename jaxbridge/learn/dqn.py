@@ -124,11 +124,10 @@ def init_learner(dqn: DQN, key: jax.Array) -> Learner:
     k_init, k_run = jax.random.split(key)
     env, num_features = dqn.env, dqn.num_features
     sample = jnp.zeros((1, input_size(env, num_features)), jnp.float32)
-    init = lambda key: {"params": dqn.net.init(key, sample)["params"]}  # the scaling, if any, is not a parameter
-    params = init(k_init)
+    variables = dqn.net.init(k_init, sample)
+    params, norm = {"params": variables["params"]}, variables.get("norm")  # the scaling is not a parameter
     target = (jax.tree.map(jnp.copy, params) if dqn.config.target_init == "copy"
-              else init(jax.random.fold_in(k_init, 1)))
-    norm = dqn.net.init(k_init, sample)["norm"] if dqn.net.normalise else None
+              else {"params": dqn.net.init(jax.random.fold_in(k_init, 1), sample)["params"]})
     return Learner(params=params, target_params=target,
                    opt_state=dqn.optimizer.init(params),
                    buffer=init_buffer(empty_transition(dqn), dqn.config.buffer_capacity),

@@ -65,10 +65,9 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     CycleMetrics of scalars). The same computation for every seed and setting. Without `host_planner`
     its rollouts leave states missing from the plan tables unplanned (meta_policy.rollout): exact only
     where the metrics report no table miss."""
-    config, approach, train, test = setup.config, setup.approach, setup.train, setup.test
+    config, approach, test = setup.config, setup.approach, setup.test
     controls = approach.controls
-    # The task batches are shared by every approach and config of an experiment; the quirks are the config's.
-    train_env, test_env = train.env.with_quirks(config.env_quirks), test.env.with_quirks(config.env_quirks)
+    train_env, test_env = setup.train_env, setup.test_env  # the task batches' envs, with the config's quirks
     train_bridge, test_bridge = setup.bridge(train_env), setup.bridge(test_env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train_env.num_skills
