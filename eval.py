@@ -56,8 +56,9 @@ def parse_args(argv):
                              "random: a uniformly random applicable action whenever stuck; none: pure planning "
                              "(re-plan whenever stuck) (default: %(default)s)")
     parser.add_argument("--test-protocol", default=None, metavar="NAME",
-                        help="with --bridge: which of the env's test-task distributions, e.g. authors (Coffee: 4 cups, "
-                             "horizon 100; Light Switch Door: horizon 30) (default: the env's first; a RUN's is its own)")
+                        help="with --bridge: which of the env's test-task distributions, e.g. jaxbridge (Coffee: 1-4 "
+                             "cups, horizon 110) or authors (Coffee: 4 cups, horizon 100; Light Switch Door: horizon "
+                             "30) (default: the one train.py trains on; a RUN's is its own)")
     parser.add_argument("--num-seeds", type=positive_int, default=8,
                         help="evaluate the test tasks of seeds first-seed .. first-seed+N-1 (default: %(default)s)")
     parser.add_argument("--first-seed", type=non_negative_int, default=0, help="first seed (default: %(default)s)")

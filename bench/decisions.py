@@ -30,7 +30,7 @@ def main() -> None:
     greedy = episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
     keys = jax.random.split(jax.random.key(123), len(owner))
     result, records = rollout(env, setup.bridge(env), greedy, test.arrays, keys,
-                              test.max_steps, record=True, controls=setup.approach.controls)
+                              test.max_steps, record=True, controls=setup.controls)
     names = env.skill_names + ("CallPlanner",)
     success = np.asarray(result.success)
     decided = np.asarray(records.decided & records.live)

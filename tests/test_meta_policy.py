@@ -11,7 +11,8 @@ from envs_jax import BridgeObs
 from envs_jax.light_switch_door import env as lsd
 from envs_jax.light_switch_door.env import LightSwitchDoor
 from jaxbridge.core.bridges import make_bridge
-from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, hashed_choice, rollout
+from jaxbridge.core.meta_policy import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, hashed_choice,
+                                       rollout, same_state)
 from jaxbridge.core.tasks import make_batch, evaluation_batch
 from planner.tables import compile_task, stack_tables
 
@@ -23,11 +24,11 @@ def batch():
     return evaluation_batch(LightSwitchDoor, SEEDS)
 
 
-def run(batch, bridge_name, seed=0, record=False, tables=None):
+def run(batch, bridge_name, seed=0, record=False, tables=None, controls=Controls()):
     bridge = make_bridge(bridge_name, batch.env)
     arrays = batch.arrays if tables is None else batch.arrays.replace(tables=tables)
     result, records = rollout(batch.env, bridge, None, arrays, jax.random.split(jax.random.key(seed), batch.size),
-                              batch.max_steps, record=record)
+                              batch.max_steps, record=record, controls=controls)
     return jax.tree.map(np.asarray, result), (None if records is None else jax.tree.map(np.asarray, records))
 
 
@@ -65,6 +66,40 @@ def test_random_bridge_only_takes_applicable_actions(batch):
     assert (np.abs(rec.slot[move] - robot_cell[move]) == 1).all()
     keys = started & np.isin(rec.skill, [batch.env.skill_index("MoveKey"), batch.env.skill_index("TurnKey")])
     assert (rec.slot[keys] == robot_cell[keys]).all()
+
+
+def guarded_repeats(batch, rec) -> tuple[int, int]:
+    """Walk every episode's bridge decisions with the loop guard's rule written out: (decisions that
+    chose a skill the rule leaves out, decisions whose recorded applicable skills differ from the rule's)."""
+    env = batch.env
+    vecs = np.asarray(jax.vmap(jax.vmap(env.state_vector))(rec.env_state))
+    chosen_no_op = wrong_counts = 0
+    for episode in range(batch.size):
+        last_vec, last_skill, no_ops = None, -1, set()
+        for t in np.flatnonzero(rec.decided[:, episode] & rec.live[:, episode]):
+            vec, skill, counts = vecs[t, episode], rec.skill[t, episode], rec.num_ground[t, episode]
+            unchanged = last_vec is not None and bool(same_state(vec, last_vec))
+            no_ops = (no_ops | ({last_skill} - {env.num_skills})) if unchanged else set()
+            expected = counts.copy()
+            expected[list(no_ops)] = 0
+            if not expected.any():  # nothing would be left: the guard stands aside
+                no_ops, expected = set(), counts
+            wrong_counts += not np.array_equal(counts, expected)
+            chosen_no_op += skill in no_ops
+            last_vec, last_skill = vec, skill
+    return chosen_no_op, wrong_counts
+
+
+def test_loop_guard_never_repeats_a_skill_that_left_the_state_unchanged(batch):
+    # The random bridge often moves the robot into the closed door (a blocked move changes nothing) and
+    # then, unguarded, draws the same move again at the same state.
+    _, unguarded = run(batch, "random", seed=1, record=True)
+    repeats, differ = guarded_repeats(batch, unguarded)
+    assert repeats > 20 and differ > 20
+    # Guarded, what is left out is exactly the rule's: the recorded applicable counts carry it (the
+    # learner's TD targets see them), and the bridge never picks a left-out skill.
+    _, guarded = run(batch, "random", seed=1, record=True, controls=Controls(loop_guard=True))
+    assert guarded_repeats(batch, guarded) == (0, 0)
 
 
 def test_stuck_hand_over_and_call_planner_step_by_step():

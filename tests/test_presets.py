@@ -34,8 +34,31 @@ def test_the_authors_preset_reaches_the_learner_and_its_bridge(env):
     assert setup.bridge(setup.test_env).n_sample == AUTHORS_N_SAMPLE[env] and not setup.bridge(setup.test_env).stratified
     assert set(setup.train_env.quirks) == set(config.env_quirks)  # every env-level quirk it has, switched on
     assert all(getattr(setup.train_env, q) and getattr(setup.test_env, q) for q in config.env_quirks)
-    assert setup.dqn.net.ensemble == 1
+    assert setup.dqn.net.ensemble == 1 and not setup.controls.loop_guard
     assert config.to_dict()["preset"] == "authors"  # config.json records it with every resolved value
+
+
+@pytest.mark.parametrize("loop_guard", [True, False])
+def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_guard):
+    """Doorknobs' default has the guard; the config's value is what the cycle's rollouts run with."""
+    from jaxbridge.learn import online
+    from jaxbridge.learn.hyper import Hyper
+
+    assert TrainConfig.for_env("doorknobs").loop_guard and TrainConfig.for_env("coffee").loop_guard
+    assert not TrainConfig.for_env("light_switch_door").loop_guard
+    seen = []
+
+    def recording_rollout(*args, controls, **kwargs):
+        seen.append(controls)
+        return rollout(*args, controls=controls, **kwargs)
+
+    rollout = online.rollout
+    monkeypatch.setattr(online, "rollout", recording_rollout)
+    setup = make_setup(TrainConfig.for_env("doorknobs", num_seeds=1, loop_guard=loop_guard))
+    learner = jax.tree.map(lambda x: x[0], setup.init_learners())
+    one = lambda batch: jax.tree.map(lambda x: x[: len(x) // setup.config.num_seeds], batch.arrays)
+    jax.eval_shape(online.make_seed_cycle(setup), learner, one(setup.train), one(setup.test), Hyper.of(setup.config))
+    assert len(seen) == 2 and all(c.loop_guard == loop_guard for c in seen)  # training and test episodes
 
 
 def test_the_authors_test_tasks_light_switch_door_fixed_horizon_30():
@@ -50,12 +73,13 @@ def test_the_authors_test_tasks_light_switch_door_fixed_horizon_30():
     assert min(ours.arrays.horizons.tolist()) == 30 and max(ours.arrays.horizons.tolist()) == 37
 
 
-def test_the_authors_test_tasks_coffee_four_cups_horizon_100():
-    config, _ = make_config({"env": "coffee", "preset": "authors", "num_seeds": 2})
-    test = make_setup(config).test
-    assert {len(s.cups) for s in test.specs} == {4} and set(test.arrays.horizons.tolist()) == {100}
-    ours = make_setup(TrainConfig.for_env("coffee", num_seeds=2)).test
-    assert {len(s.cups) for s in ours.specs} == {1, 2, 3, 4} and set(ours.arrays.horizons.tolist()) == {110}
+def test_the_authors_test_tasks_coffee_four_cups_horizon_100_are_both_presets_default():
+    for preset in ("authors", "jaxbridge"):
+        config, _ = make_config({"env": "coffee", "preset": preset, "num_seeds": 2})
+        test = make_setup(config).test
+        assert {len(s.cups) for s in test.specs} == {4} and set(test.arrays.horizons.tolist()) == {100}
+    variant = make_setup(TrainConfig.for_env("coffee", num_seeds=2, test_protocol="jaxbridge")).test
+    assert {len(s.cups) for s in variant.specs} == {1, 2, 3, 4} and set(variant.arrays.horizons.tolist()) == {110}
 
 
 @pytest.mark.parametrize("env", ENVS)

@@ -11,6 +11,7 @@ import numpy as np
 from jaxbridge.commands.envs import load_env
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import Controls
+from jaxbridge.core.presets import DEFAULT_PRESET, preset_values
 from jaxbridge.core.tasks import evaluation_specs, make_batch
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.run.checkpoint import CheckpointError
@@ -254,10 +255,11 @@ def run(args) -> int:
     if args.task_size is not None:
         raise UsageError("--task-size evaluates a trained RUN on larger tasks; give a RUN")
     env_cls = load_env(args.env)
+    protocol = args.test_protocol or preset_values(DEFAULT_PRESET, env_cls).get("test_protocol")  # as train.py
     seeds = list(range(args.first_seed, args.first_seed + args.num_seeds))
     start = time.perf_counter()
     try:
-        specs, owners = evaluation_specs(env_cls, seeds, args.num_tasks, args.test_protocol)
+        specs, owners = evaluation_specs(env_cls, seeds, args.num_tasks, protocol)
         check_evaluation(env_cls, specs, max_memory_bytes(args))
     except (ValueError, TooBig) as err:
         raise UsageError(str(err)) from None
@@ -268,7 +270,7 @@ def run(args) -> int:
     except ValueError as err:
         raise UsageError(str(err)) from None
     result = run_bridge(batch, bridge, seed=args.rollout_seed)
-    print(f"{args.env}, bridge = {args.bridge}, {batch.size} test tasks{protocol_note(env_cls, args.test_protocol)} "
+    print(f"{args.env}, bridge = {args.bridge}, {batch.size} test tasks{protocol_note(env_cls, protocol)} "
           f"({time.perf_counter() - start:.1f} s including compilation)")
     print(format_table(summarise(batch, result)))
     if args.render is not None or args.gif is not None:

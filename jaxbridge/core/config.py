@@ -9,8 +9,9 @@ from dataclasses import dataclass
 # stored whole observations and load with it off); 4: `preset`, `test_protocol`, `activation`,
 # `target_init`, `reset_optimizer`, `explore_ground_operators` (older runs were the jaxbridge preset,
 # which their defaults are); 5: `output_init` (older runs started their output layer at zero); 6:
-# `env_quirks`, `normalise`, `fit_patience`, `param_samples` (older runs had none of them: their defaults)
-CONFIG_VERSION = 6
+# `env_quirks`, `normalise`, `fit_patience`, `param_samples` (older runs had none of them: their defaults);
+# 7: `loop_guard` (older runs had none)
+CONFIG_VERSION = 7
 
 
 # The numeric hyperparameters that change no shape or program: pytree leaves of the cycle
@@ -136,6 +137,11 @@ class TrainConfig:
     """Clip the bootstrapped next-state value of every TD target to [0, 1 + call_planner_bonus], the range
     every true Q lies in (rewards are 0, or that much at the goal). Stops the max over sampled parameters
     from feeding its upward noise back into the targets (off in the paper)."""
+    loop_guard: bool = False
+    """At a bridge decision, a skill the bridge already chose in this same low-level state, which left it
+    unchanged, is not applicable (nor, once the state is the same again, any other such skill): a
+    greedy bridge cannot repeat a skill that does nothing until the horizon. Training and test
+    episodes alike, every approach with a bridge (not in the paper)."""
     env_quirks: tuple[str, ...] = ()
     """Behaviours of the authors' env that ours departs from, switched back on by name (the env's `quirks`,
     e.g. Coffee's "shared_repeat_flag"); none by default."""
@@ -173,7 +179,7 @@ class TrainConfig:
             data.setdefault("approach", "ours")
         if version in (1, 2):
             data.setdefault("split_task_state", False)
-        elif version not in (3, 4, 5, CONFIG_VERSION):
+        elif version not in (3, 4, 5, 6, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields

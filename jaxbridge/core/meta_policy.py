@@ -10,8 +10,9 @@ Per env step, for a whole batch of episodes (any mix of seeds and tasks):
    or if the low-level state did not change since its last step (a blocked move). Stuck hands control
    to the bridge at this same state (detection itself costs no env step).
 4. bridge turn: when its skill has finished, the bridge picks an applicable ground skill or CallPlanner
-   (applicable once the state changed since the bridge took over). Evaluated only on steps where some
-   episode decides, so a costly learned bridge is not paid while planners act.
+   (applicable once the state changed since the bridge took over; with the loop guard, a skill it
+   already chose in this same state, which left it unchanged, is not). Evaluated only on steps where
+   some episode decides, so a costly learned bridge is not paid while planners act.
 5. execute: CallPlanner emits one zero action and gives control back to a fresh plan from the current
    state; otherwise the running skill's action is applied.
 
@@ -45,6 +46,7 @@ class Controls:
     planner: bool = True  # False: pure RL, the bridge acts from the first step and nothing plans
     call_planner: bool = True  # False: no CallPlanner; once stuck, the bridge keeps control
     full_state: bool = False  # the bridge sees every object's raw features instead of the selected ones
+    loop_guard: bool = False  # a skill that left the state unchanged is not applicable again in that state
 
 
 def observation_size(env: NoveltyEnv, controls: Controls) -> int:
@@ -74,6 +76,9 @@ class Episode:
     table_misses: jax.Array  # int32: lookups answered by the host planner
     bridge_decisions: jax.Array  # int32: choices made by the bridge, CallPlanner included
     stuck_events: jax.Array  # int32
+    decision_vec: jax.Array  # float32[D]: low-level state at the bridge's last decision (loop guard)
+    decision_skill: jax.Array  # int32: the skill it chose there (-1: none yet; num_skills: CallPlanner)
+    no_op_skills: jax.Array  # bool[num_skills]: skills the bridge chose in this state that left it unchanged
 
 
 @struct.dataclass
@@ -85,6 +90,7 @@ class Decision:
     param: jax.Array  # float32
     features: jax.Array  # float32[F]: what the bridge saw
     num_ground: jax.Array  # int32[num_skills + 1]: what it could choose from (CallPlanner last)
+    no_op_skills: jax.Array  # bool[num_skills]: the loop guard's skills left out of num_ground
 
 
 @struct.dataclass
@@ -135,7 +141,8 @@ def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.A
                    call=idle_call(), expected=jnp.zeros(num_words(env.num_atoms), jnp.uint32),
                    prev_vec=vec, planner_stepped=jnp.bool_(False), bridge_vec=vec,
                    planner_calls=jnp.int32(int(controls.planner)), table_misses=zero, bridge_decisions=zero,
-                   stuck_events=zero)
+                   stuck_events=zero, decision_vec=vec, decision_skill=jnp.int32(-1),
+                   no_op_skills=jnp.zeros(env.num_skills, bool))
 
 
 def observe(env: NoveltyEnv, ep: Episode):
@@ -158,6 +165,21 @@ def count_by_skill(env: NoveltyEnv, table: PlanTable, op_ok: jax.Array) -> jax.A
     """int32[num_skills]: applicable ground operators of each skill."""
     of_skill = table.op_skill[None, :] == jnp.arange(env.num_skills)[:, None]
     return jnp.sum(of_skill & op_ok[None, :], axis=-1, dtype=jnp.int32)
+
+
+def guard_loops(ep: Episode, vec: jax.Array, skill_counts: jax.Array, can_plan: jax.Array):
+    """The loop guard: (skill counts without the skills that left this state unchanged, those skills).
+
+    In a deterministic env a skill that changed nothing changes nothing when chosen again in the same
+    state, and a greedy bridge would choose it again until the horizon (docs/RESULTS.md, Doorknobs). The
+    set grows while the state stays the same and empties when it changes; where it would leave nothing to
+    choose, nothing is left out."""
+    unchanged = (ep.decision_skill >= 0) & same_state(vec, ep.decision_vec)
+    last = jnp.arange(skill_counts.shape[0]) == ep.decision_skill  # CallPlanner (num_skills) adds nothing
+    no_ops = unchanged & (ep.no_op_skills | last)
+    guarded = jnp.where(no_ops, 0, skill_counts)
+    keep = can_plan | jnp.any(guarded > 0)
+    return jnp.where(keep, guarded, skill_counts), no_ops & keep
 
 
 def hashed_choice(mask: jax.Array, bits: jax.Array) -> jax.Array:
@@ -217,13 +239,17 @@ def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any
     vec = env.state_vector(state)
     op_ok = applicable_ops(env, table, atoms, state)
     can_plan = ~same_state(vec, ep.bridge_vec) & controls.call_planner
-    num_ground = jnp.concatenate([count_by_skill(env, table, op_ok), can_plan[None].astype(jnp.int32)])
+    skill_counts, no_ops = count_by_skill(env, table, op_ok), jnp.zeros(env.num_skills, bool)
+    if controls.loop_guard:
+        skill_counts, no_ops = guard_loops(ep, vec, skill_counts, can_plan)
+        op_ok = op_ok & ~no_ops[table.op_skill]
+    num_ground = jnp.concatenate([skill_counts, can_plan[None].astype(jnp.int32)])
     obs = BridgeObs(features=observation(env, controls, state, ep.stuck_state), num_ground=num_ground)
     choice = bridge(params, obs, key)
     skill = jnp.clip(choice.skill, 0, env.num_skills if controls.call_planner else env.num_skills - 1)
     op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)
     return Decision(skill=skill.astype(jnp.int32), slot=table.op_slot[op], param=choice.param,
-                    features=obs.features, num_ground=num_ground)
+                    features=obs.features, num_ground=num_ground, no_op_skills=no_ops)
 
 
 def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
@@ -258,6 +284,9 @@ def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
         planner_stepped=planner_acted,  # False after CallPlanner: the new plan starts fresh
         planner_calls=ep.planner_calls + call_planner,
         bridge_decisions=ep.bridge_decisions + decide,
+        decision_vec=jnp.where(decide, env.state_vector(state), ep.decision_vec),
+        decision_skill=jnp.where(decide, decision.skill, ep.decision_skill),
+        no_op_skills=jnp.where(decide, decision.no_op_skills, ep.no_op_skills),
     )
     return ep, record
 
@@ -303,7 +332,8 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArra
     no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
                            param=jnp.zeros(num_episodes, jnp.float32),
                            features=jnp.zeros((num_episodes, observation_size(env, controls)), jnp.float32),
-                           num_ground=jnp.zeros((num_episodes, env.num_skills + 1), jnp.int32))
+                           num_ground=jnp.zeros((num_episodes, env.num_skills + 1), jnp.int32),
+                           no_op_skills=jnp.zeros((num_episodes, env.num_skills), bool))
 
     def step(episodes: Episode, randomness):
         param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]

@@ -22,6 +22,7 @@ AUTHORS = {
     "call_planner_bonus": 0.5,  # +0.5 when CallPlanner's transition reaches the goal
     "clip_bootstrap": False,  # no clipping of the bootstrapped value
     "q_ensemble": 1,  # one network
+    "loop_guard": False,  # a skill may be chosen again in the state it left unchanged
     "activation": "relu",  # plain ReLU hidden units
     "output_init": "uniform",  # PyTorch's default init of the output layer too
     "target_init": "apart",  # the target initialised apart from the online network

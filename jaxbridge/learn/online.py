@@ -66,7 +66,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     its rollouts leave states missing from the plan tables unplanned (meta_policy.rollout): exact only
     where the metrics report no table miss."""
     config, approach, test = setup.config, setup.approach, setup.test
-    controls = approach.controls
+    controls = setup.controls
     train_env, test_env = setup.train_env, setup.test_env  # the task batches' envs, with the config's quirks
     train_bridge, test_bridge = setup.bridge(train_env), setup.bridge(test_env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks

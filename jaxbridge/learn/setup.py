@@ -2,6 +2,7 @@
 envs, the approach, the Q-network and the optimiser, and (built on first use) the seeds' task batches."""
 from __future__ import annotations
 
+import dataclasses
 import threading
 from dataclasses import dataclass
 from functools import cached_property, lru_cache, partial
@@ -12,6 +13,7 @@ import jax.numpy as jnp
 from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.meta_policy import Controls
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.dqn import DQN, Learner, init_learner, make_dqn
@@ -39,6 +41,11 @@ class Setup:
     def test(self) -> TaskBatch:
         """Each seed's test tasks, seed-major (built on first use)."""
         return task_batches(self)[1]
+
+    @property
+    def controls(self) -> Controls:
+        """The meta-policy's parts: the approach's, with the config's loop guard."""
+        return dataclasses.replace(self.approach.controls, loop_guard=self.config.loop_guard)
 
     def bridge(self, env: NoveltyEnv) -> Bridge:
         """The approach's bridge on `env` (equal arguments give equal bridges: one compilation)."""

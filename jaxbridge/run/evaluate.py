@@ -115,7 +115,7 @@ class TrainedPolicy:
         owner = np.array([index[s] for s in batch.seeds.tolist()])
         bridge = self.setup.bridge(batch.env)
         greedy = episode_params(self.learners, owner, np.zeros(len(owner), np.float32))
-        return bridge, greedy, self.approach.controls
+        return bridge, greedy, self.setup.controls
 
     def run(self, batch: TaskBatch, seed: int = 0) -> EpisodeResult:
         bridge, greedy, controls = self.on(batch)
