@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from jaxbridge.core.config import CONFIG_VERSION
 from run_helpers import read_scalars
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -80,7 +81,7 @@ def test_train_writes_the_run_directory(short_run):
     assert final["mean_ci"][0] <= final["mean"] <= final["mean_ci"][1] and len(final["per_seed"]) == 2
     assert all(len(v) == 3 for v in summary["per_cycle"]["test_solve_rate"].values())
     config = json.loads((run_dir / "config.json").read_text())
-    assert config["config_version"] == 6 and config["num_seeds"] == 2 and config["approach"] == "ours"
+    assert config["config_version"] == CONFIG_VERSION == 7 and config["num_seeds"] == 2 and config["approach"] == "ours"
     # --preset authors, resolved: the authors' values in every field they set (jaxbridge/core/presets.py)
     assert config["preset"] == "authors" and config["test_protocol"] == "authors"
     assert (config["batch_size"], config["n_sample"], config["n_target_sample"], config["polyak_per"],
