@@ -40,12 +40,14 @@ def test_the_authors_preset_reaches_the_learner_and_its_bridge(env):
 
 @pytest.mark.parametrize("loop_guard", [True, False])
 def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_guard):
-    """Doorknobs' default has the guard; the config's value is what the cycle's rollouts run with."""
+    """Every env's default has the guard (runs saved before it, none); the config's value is what the
+    cycle's rollouts run with."""
     from jaxbridge.learn import online
     from jaxbridge.learn.hyper import Hyper
 
-    assert TrainConfig.for_env("doorknobs").loop_guard and TrainConfig.for_env("coffee").loop_guard
-    assert not TrainConfig.for_env("light_switch_door").loop_guard
+    assert all(TrainConfig.for_env(env).loop_guard for env in ENVS)
+    old_run = {k: v for k, v in TrainConfig().to_dict().items() if k != "loop_guard"}
+    assert not TrainConfig.from_dict({**old_run, "config_version": 6}).loop_guard
     seen = []
 
     def recording_rollout(*args, controls, **kwargs):

@@ -105,9 +105,9 @@ class Coffee(NoveltyEnv):
                                  world.sweep_horizon)
     test_tasks = staticmethod(world.test_tasks)
     train_steps = TRAIN_STEPS
-    # Fewer updates: a cycle yields few bridge decisions, and 1000 updates overfit them; the loop guard stops a
-    # greedy bridge repeating a skill that changed nothing (docs/RESULTS.md, Coffee). Tested on the authors' tasks.
-    train_defaults: ClassVar[dict] = {"updates_per_cycle": 250, "loop_guard": True, "test_protocol": "authors"}
+    # Fewer updates: a cycle yields few bridge decisions, and 1000 updates overfit them (docs/RESULTS.md, Coffee).
+    # Tested on the authors' tasks, the distribution of their logged runs.
+    train_defaults: ClassVar[dict] = {"updates_per_cycle": 250, "test_protocol": "authors"}
     test_protocols = world.TEST_PROTOCOLS
     authors_defaults: ClassVar[dict] = {"n_sample": 10, "test_protocol": "authors",
                                         "env_quirks": ("shared_repeat_flag",)}

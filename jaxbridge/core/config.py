@@ -137,11 +137,11 @@ class TrainConfig:
     """Clip the bootstrapped next-state value of every TD target to [0, 1 + call_planner_bonus], the range
     every true Q lies in (rewards are 0, or that much at the goal). Stops the max over sampled parameters
     from feeding its upward noise back into the targets (off in the paper)."""
-    loop_guard: bool = False
+    loop_guard: bool = True
     """At a bridge decision, a skill the bridge already chose in this same low-level state, which left it
     unchanged, is not applicable (nor, once the state is the same again, any other such skill): a
     greedy bridge cannot repeat a skill that does nothing until the horizon. Training and test
-    episodes alike, every approach with a bridge (not in the paper)."""
+    episodes alike, every approach with a bridge (not in the paper; off in the authors' preset)."""
     env_quirks: tuple[str, ...] = ()
     """Behaviours of the authors' env that ours departs from, switched back on by name (the env's `quirks`,
     e.g. Coffee's "shared_repeat_flag"); none by default."""
@@ -181,6 +181,8 @@ class TrainConfig:
             data.setdefault("split_task_state", False)
         elif version not in (3, 4, 5, 6, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
+        if version != CONFIG_VERSION:  # runs before version 7 had no loop guard
+            data.setdefault("loop_guard", False)
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields
         if unknown:
