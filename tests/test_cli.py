@@ -81,7 +81,7 @@ def test_train_writes_the_run_directory(short_run):
     assert final["mean_ci"][0] <= final["mean"] <= final["mean_ci"][1] and len(final["per_seed"]) == 2
     assert all(len(v) == 3 for v in summary["per_cycle"]["test_solve_rate"].values())
     config = json.loads((run_dir / "config.json").read_text())
-    assert config["config_version"] == CONFIG_VERSION == 7 and config["num_seeds"] == 2 and config["approach"] == "ours"
+    assert config["config_version"] == CONFIG_VERSION and config["num_seeds"] == 2 and config["approach"] == "ours"
     # --preset authors, resolved: the authors' values in every field they set (jaxbridge/core/presets.py)
     assert config["preset"] == "authors" and config["test_protocol"] == "authors"
     assert (config["batch_size"], config["n_sample"], config["n_target_sample"], config["polyak_per"],
@@ -198,3 +198,14 @@ def test_eval_hand_made_bridges():
     assert proc.returncode == 0, proc.stderr
     last = proc.stdout.strip().splitlines()[-1].split()
     assert last[0] == "all" and float(last[2]) == 1.0  # every task solved
+
+
+def test_eval_hand_made_bridges_meet_the_test_tasks_train_py_would():
+    """Coffee trains on the authors' 4-cup tasks by default; eval.py --bridge evaluates those too, and
+    names the protocol only when it is another one."""
+    default = run("eval.py", "--env", "coffee", "--bridge", "oracle", "--num-seeds", "1")
+    variant = run("eval.py", "--env", "coffee", "--bridge", "oracle", "--num-seeds", "1", "--test-protocol", "jaxbridge")
+    assert default.returncode == variant.returncode == 0, default.stderr + variant.stderr
+    sizes = lambda proc: {" ".join(line.split()[1:3]) for line in proc.stdout.splitlines() if line.split()[:1] == ["0"]}
+    assert sizes(default) == {"4 cups"} and "protocol" not in default.stdout.splitlines()[0]
+    assert "jaxbridge protocol" in variant.stdout.splitlines()[0]

@@ -322,7 +322,8 @@ TEST_SEEDS = list(range(8))
 
 @pytest.fixture(scope="module")
 def batch():
-    """Every test task of seeds 0-7, then every seed's training task (with the training steps)."""
+    """Every test task of seeds 0-7 of the 1-4-cup variant (`Coffee.test_tasks`' own default, protocol
+    "jaxbridge"), then every seed's training task (with the training steps)."""
     specs = [t for seed in TEST_SEEDS for t in Coffee.test_tasks(seed)] + [Coffee.train_task(s) for s in TEST_SEEDS]
     horizons = [Coffee.test_tasks(0)[0].horizon] * 80 + [Coffee.train_steps] * 8
     return make_batch(Coffee, specs, [s for s in TEST_SEEDS for _ in range(10)] + TEST_SEEDS, horizons)
@@ -340,13 +341,13 @@ def test_the_planner_model_never_twists(batch):
         assert plan[4:] == ["PourFromNowhere"] + ["PourFromOtherCup"] * (len(spec.cups) - 1)
 
 
-def test_oracle_bridge_solves_every_test_task_of_seeds_0_to_7_within_the_test_horizon(batch, results):
+def test_oracle_bridge_solves_every_variant_test_task_of_seeds_0_to_7_within_its_horizon(batch, results):
     result = results["oracle"]
     assert batch.size == 88 and result.success.all() and result.table_misses.sum() == 0
     # Stuck once at the rotated jug: MoveToTwistJug, TwistJug, CallPlanner.
     assert (result.stuck_events == 1).all() and (result.bridge_decisions == 3).all()
     assert (result.planner_calls == 2).all()
-    # The test horizon is the smallest multiple of 10 that fits the longest test episode.
+    # The variant's horizon is the smallest multiple of 10 that fits the longest test episode.
     horizon = Coffee.test_tasks(0)[0].horizon
     assert horizon - 10 < result.steps[:80].max() <= horizon and result.steps[80:].max() <= Coffee.train_steps
     # min_steps (train.py refuses shorter training horizons) is a lower bound.

@@ -50,11 +50,12 @@ def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_gua
     assert not TrainConfig.from_dict({**old_run, "config_version": 6}).loop_guard
     seen = []
 
+    original_rollout = online.rollout
+
     def recording_rollout(*args, controls, **kwargs):
         seen.append(controls)
-        return rollout(*args, controls=controls, **kwargs)
+        return original_rollout(*args, controls=controls, **kwargs)
 
-    rollout = online.rollout
     monkeypatch.setattr(online, "rollout", recording_rollout)
     setup = make_setup(TrainConfig.for_env("doorknobs", num_seeds=1, loop_guard=loop_guard))
     learner = jax.tree.map(lambda x: x[0], setup.init_learners())

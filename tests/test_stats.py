@@ -63,16 +63,3 @@ def test_seed_ranges_in_words():
     assert stats.seed_range([7, 0, 1, 2, 3]) == "0-3, 7"
     assert stats.seed_range([5]) == "5"
 
-
-def test_the_sweeps_reliability_figures_count_late_dips_and_low_means():
-    from bench.sweep import reliability
-
-    rates = np.ones((4, 60))
-    rates[0, 44] = 0.6  # cycle 45: before 50, only the means count it
-    rates[1, 54:56] = 0.7  # cycles 55-56: two seed-cycles below 0.8
-    rates[2, 59] = 0.8  # cycle 60: 0.8 is not below 0.8
-    line = reliability(rates, 0.93)
-    assert "lowest mean from cycle 40 0.900" in line and "cycles from 40 with mean < 0.95: 3;" in line  # cycles 45, 55, 56
-    assert "seed-cycles below 0.8 from cycle 50: 2/44" in line and "lowest mean from cycle 50 0.925" in line
-    assert "cycles from 50 with mean >= 0.93: 9/11" in line
-    assert reliability(rates[:, :49], 0.95) == "reliability: needs 50 cycles or more"

@@ -126,7 +126,7 @@ def test_tasks(seed: int, num_tasks: int = 10, protocol: str = "jaxbridge") -> l
     return [dataclasses.replace(sample_task(rng, cup_counts), horizon=horizon) for _ in range(num_tasks)]
 
 
-SWEEP_CUPS = (1, 2, 3, 4, 5, 6)  # eval.py --sweep: 1..6 cups, beyond the test tasks' 1-4
+SWEEP_CUPS = (1, 2, 3, 4, 5, 6)  # eval.py --sweep: 1..6 cups, beyond the test tasks' 4
 SWEEP_STEPS_PER_CUP = 20  # the oracle needs 14-17 more steps per cup (max 101 for 4 cups, 132 for 6)
 
 

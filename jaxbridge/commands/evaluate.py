@@ -11,7 +11,7 @@ import numpy as np
 from jaxbridge.commands.envs import load_env
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import Controls
-from jaxbridge.core.presets import DEFAULT_PRESET, preset_values
+from jaxbridge.core.presets import default_test_protocol
 from jaxbridge.core.tasks import evaluation_specs, make_batch
 from jaxbridge.learn.approaches import APPROACHES
 from jaxbridge.run.checkpoint import CheckpointError
@@ -136,9 +136,8 @@ def sized_tasks(sizes: dict[str, int] | None, env_cls):
 
 
 def protocol_note(env_cls, protocol: str | None) -> str:
-    """", authors' protocol: 4 cups per task, ..." where the test tasks are not the env's default ones."""
-    default = next(iter(env_cls.test_protocols))
-    return "" if protocol in (None, default) else f" ({protocol} protocol: {env_cls.test_protocols[protocol]})"
+    """" (jaxbridge protocol: 1-4 cups per task, ...)" where the test tasks are not the env's default ones."""
+    return "" if protocol in (None, default_test_protocol(env_cls)) else f" ({protocol} protocol: {env_cls.test_protocols[protocol]})"
 
 
 def max_memory_bytes(args) -> int | None:
@@ -255,7 +254,7 @@ def run(args) -> int:
     if args.task_size is not None:
         raise UsageError("--task-size evaluates a trained RUN on larger tasks; give a RUN")
     env_cls = load_env(args.env)
-    protocol = args.test_protocol or preset_values(DEFAULT_PRESET, env_cls).get("test_protocol")  # as train.py
+    protocol = args.test_protocol or default_test_protocol(env_cls)
     seeds = list(range(args.first_seed, args.first_seed + args.num_seeds))
     start = time.perf_counter()
     try:

@@ -138,8 +138,8 @@ class TrainConfig:
     every true Q lies in (rewards are 0, or that much at the goal). Stops the max over sampled parameters
     from feeding its upward noise back into the targets (off in the paper)."""
     loop_guard: bool = True
-    """At a bridge decision, a skill the bridge already chose in this same low-level state, which left it
-    unchanged, is not applicable (nor, once the state is the same again, any other such skill): a
+    """At a bridge decision, every skill the bridge already chose at decisions in this same low-level
+    state (each of which left it unchanged) is not applicable, whatever its grounding or parameter: a
     greedy bridge cannot repeat a skill that does nothing until the horizon. Training and test
     episodes alike, every approach with a bridge (not in the paper; off in the authors' preset)."""
     env_quirks: tuple[str, ...] = ()

@@ -39,9 +39,10 @@ PLANNER, BRIDGE = 0, 1  # who is in control of an episode
 
 @dataclass(frozen=True)
 class Controls:
-    """Which parts of the meta-policy an approach uses (static: each combination compiles once).
+    """Which parts of the meta-policy a run uses (static: each combination compiles once).
 
-    The paper's ablations switch these off (reference/method.md §6); everything else is shared."""
+    The paper's ablations switch the first three off (reference/method.md §6); the loop guard comes from
+    the run's config (`Setup.controls`), so build a run's controls there, not from the approach alone."""
 
     planner: bool = True  # False: pure RL, the bridge acts from the first step and nothing plans
     call_planner: bool = True  # False: no CallPlanner; once stuck, the bridge keeps control
@@ -171,9 +172,11 @@ def guard_loops(ep: Episode, vec: jax.Array, skill_counts: jax.Array, can_plan: 
     """The loop guard: (skill counts without the skills that left this state unchanged, those skills).
 
     In a deterministic env a skill that changed nothing changes nothing when chosen again in the same
-    state, and a greedy bridge would choose it again until the horizon (docs/RESULTS.md, Doorknobs). The
-    set grows while the state stays the same and empties when it changes; where it would leave nothing to
-    choose, nothing is left out."""
+    state with the same grounding and parameter, and a greedy bridge would choose it again until the
+    horizon (docs/RESULTS.md, Doorknobs). The whole skill is left out (the Q-function's argmax would land
+    on a nearby parameter again), so another parameter that would have worked is lost at this state.
+    The set grows while the bridge decides in the same state and empties when it decides in another;
+    where it would leave nothing to choose, nothing is left out."""
     unchanged = (ep.decision_skill >= 0) & same_state(vec, ep.decision_vec)
     last = jnp.arange(skill_counts.shape[0]) == ep.decision_skill  # CallPlanner (num_skills) adds nothing
     no_ops = unchanged & (ep.no_op_skills | last)
@@ -262,6 +265,7 @@ def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
                             running=jnp.bool_(True), steps=jnp.int32(0))
     call = tree_where(start_skill, bridge_call, ep.call)
 
+    vec = env.state_vector(state)
     action = jnp.where(call_planner, 0.0, env.skill_action(state, call))  # CallPlanner: a no-op step
     next_state = tree_where(live, env.step(state, action), state)
     acted = live & ~call_planner & call.running  # a skill's policy chose this step's action
@@ -280,11 +284,11 @@ def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
                           steps=call.steps + live),
         control=jnp.where(call_planner, PLANNER, ep.control),
         expected=jnp.where(call_planner, jnp.zeros_like(ep.expected), ep.expected),
-        prev_vec=env.state_vector(state),
+        prev_vec=vec,
         planner_stepped=planner_acted,  # False after CallPlanner: the new plan starts fresh
         planner_calls=ep.planner_calls + call_planner,
         bridge_decisions=ep.bridge_decisions + decide,
-        decision_vec=jnp.where(decide, env.state_vector(state), ep.decision_vec),
+        decision_vec=jnp.where(decide, vec, ep.decision_vec),
         decision_skill=jnp.where(decide, decision.skill, ep.decision_skill),
         no_op_skills=jnp.where(decide, decision.no_op_skills, ep.no_op_skills),
     )

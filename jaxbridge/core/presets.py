@@ -44,3 +44,9 @@ def preset_values(preset: str, env_cls) -> dict:
     if preset == "authors":
         values.update(AUTHORS, **env_cls.authors_defaults)
     return values
+
+
+def default_test_protocol(env_cls) -> str:
+    """The test protocol a plain `train.py --env E` trains on, and `eval.py --env E --bridge B` evaluates."""
+    from jaxbridge.core.config import TrainConfig
+    return preset_values(DEFAULT_PRESET, env_cls).get("test_protocol", TrainConfig.test_protocol)
