@@ -62,6 +62,9 @@ def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_gua
     one = lambda batch: jax.tree.map(lambda x: x[: len(x) // setup.config.num_seeds], batch.arrays)
     jax.eval_shape(online.make_seed_cycle(setup), learner, one(setup.train), one(setup.test), Hyper.of(setup.config))
     assert len(seen) == 2 and all(c.loop_guard == loop_guard for c in seen)  # training and test episodes
+    # eval.py, its sweeps and renders run a saved run's greedy policy with the same controls
+    from jaxbridge.run.evaluate import TrainedPolicy
+    assert TrainedPolicy(setup, 0, setup.init_learners()).on(setup.test)[2] == setup.controls == seen[-1]
 
 
 def test_the_authors_test_tasks_light_switch_door_fixed_horizon_30():
