@@ -366,7 +366,7 @@ def test_smooth_reward_is_the_papers_trailing_window():
 
 
 def test_a_short_learning_run_beats_the_RandomBridge():
-    config = TrainConfig(num_seeds=2, first_seed=1, cycles=12, updates_per_cycle=500, num_test_tasks=5)
+    config = TrainConfig(num_seeds=2, first_seed=1, cycles=16, updates_per_cycle=500, num_test_tasks=5)
     setup, _, history = _train(config)
     learned = np.stack([m.test_solve_rate for m in history[-5:]]).mean(0)  # per seed, last 5 cycles
     from jaxbridge.run.evaluate import run_bridge

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import logging
 import os
 import shutil
 import sys
@@ -25,6 +26,17 @@ from orbax.checkpoint import checkpoint_managers
 from jaxbridge.learn.devices import is_prng_key
 from jaxbridge.utils.distributed import multi_process
 from jaxbridge.utils.files import WriteError, write_atomic
+
+
+class _DropRaisedWriteErrors(logging.Filter):
+    """orbax logs a failed background write, traceback and all, before it raises the same error to the
+    save that waits on it; the run reports that error itself, in one line."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "_SignalingThread.run() raised an exception" not in str(record.msg)
+
+
+logging.getLogger("absl").addFilter(_DropRaisedWriteErrors())
 
 KEEP = 2
 
