@@ -196,6 +196,8 @@ def main(args, devices: list) -> int:
     from jaxbridge.run.runner import Interrupted, NumericalFault
 
     checkpoint.QUIET = not args.debug
+    if not args.debug:
+        checkpoint.quiet_failed_writes()
     try:
         summaries = run_watched(run)
     except checkpoint.CheckpointError as err:

@@ -36,7 +36,18 @@ class _DropRaisedWriteErrors(logging.Filter):
         return "_SignalingThread.run() raised an exception" not in str(record.msg)
 
 
-logging.getLogger("absl").addFilter(_DropRaisedWriteErrors())
+def quiet_failed_writes() -> None:
+    """Keep a failed checkpoint write to the run's own one-line report (train.py without --debug): drop
+    orbax's log of it, and the tracebacks of tensorstore's late callbacks into the event loop orbax
+    closed when the write failed ("Event loop is closed", printed through sys.excepthook)."""
+    logging.getLogger("absl").addFilter(_DropRaisedWriteErrors())
+    default_hook = sys.excepthook
+
+    def excepthook(kind, value, traceback):
+        if not (kind is RuntimeError and str(value) == "Event loop is closed"):
+            default_hook(kind, value, traceback)
+
+    sys.excepthook = excepthook
 
 KEEP = 2
 
