@@ -195,9 +195,7 @@ def main(args, devices: list) -> int:
     from jaxbridge.run.experiments import is_experiment_dir
     from jaxbridge.run.runner import Interrupted, NumericalFault
 
-    checkpoint.QUIET = not args.debug
-    if not args.debug:
-        checkpoint.quiet_failed_writes()
+    checkpoint.set_quiet(not args.debug)
     try:
         summaries = run_watched(run)
     except checkpoint.CheckpointError as err:

@@ -27,28 +27,6 @@ from jaxbridge.learn.devices import is_prng_key
 from jaxbridge.utils.distributed import multi_process
 from jaxbridge.utils.files import WriteError, write_atomic
 
-
-class _DropRaisedWriteErrors(logging.Filter):
-    """orbax logs a failed background write, traceback and all, before it raises the same error to the
-    save that waits on it; the run reports that error itself, in one line."""
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        return "_SignalingThread.run() raised an exception" not in str(record.msg)
-
-
-def quiet_failed_writes() -> None:
-    """Keep a failed checkpoint write to the run's own one-line report (train.py without --debug): drop
-    orbax's log of it, and the tracebacks of tensorstore's late callbacks into the event loop orbax
-    closed when the write failed ("Event loop is closed", printed through sys.excepthook)."""
-    logging.getLogger("absl").addFilter(_DropRaisedWriteErrors())
-    default_hook = sys.excepthook
-
-    def excepthook(kind, value, traceback):
-        if not (kind is RuntimeError and str(value) == "Event loop is closed"):
-            default_hook(kind, value, traceback)
-
-    sys.excepthook = excepthook
-
 KEEP = 2
 
 
@@ -102,7 +80,37 @@ def save(directory: Path, step: int, state: Any, record: dict) -> None:
 
 
 QUIET = True  # orbax's and tensorstore's own reports of a failed save (tracebacks from their threads) go
-# to /dev/null; save raises one WriteError instead. train.py --debug shows them.
+# to /dev/null; save raises one WriteError instead. train.py --debug shows them (`set_quiet`).
+
+
+def set_quiet(quiet: bool) -> None:
+    """Whether a failed save is only the run's one-line report (train.py) or also orbax's and tensorstore's
+    own reports (--debug). Besides a save's own stderr (`_quiet`), quiet drops what they print outside
+    it: orbax's log of the failed background write, and the "Event loop is closed" tracebacks of
+    tensorstore's late callbacks into the event loop orbax closed (through sys.excepthook)."""
+    global QUIET
+    QUIET = quiet
+    logging.getLogger("absl").addFilter(_RAISED_WRITE_ERRORS)  # the same filter once, however often called
+    if sys.excepthook is not _excepthook:
+        global _default_excepthook
+        _default_excepthook, sys.excepthook = sys.excepthook, _excepthook
+
+
+class _DropRaisedWriteErrors(logging.Filter):
+    """orbax logs a failed background write, traceback and all, before it raises the same error to the
+    save that waits on it."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not (QUIET and "_SignalingThread.run() raised an exception" in str(record.msg))
+
+
+_RAISED_WRITE_ERRORS = _DropRaisedWriteErrors()
+_default_excepthook = sys.excepthook
+
+
+def _excepthook(kind, value, traceback) -> None:
+    if not (QUIET and kind is RuntimeError and str(value) == "Event loop is closed"):
+        _default_excepthook(kind, value, traceback)
 
 
 @contextlib.contextmanager
