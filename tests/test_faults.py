@@ -4,6 +4,7 @@ runner and checkpoints as learning ones, compiled faster."""
 import os
 import signal
 import subprocess
+import sys
 import time
 
 import pytest
@@ -77,3 +78,25 @@ def test_a_filesystem_turned_read_only_stops_the_run_in_one_line(small_disk):
     sealed = checkpoint.sealed_steps(run / "checkpoints")
     assert sealed and f"pure_planning cycle {sealed[-1]};" in err
     checkpoint.verify(run / "checkpoints", sealed[-1])  # what --resume will load is whole
+
+
+QUIET_REPORTS = """
+import sys
+from jaxbridge.run import checkpoint
+checkpoint.set_quiet({quiet})
+
+class LateCallback:  # raises where Python can only report it (as tensorstore's late callbacks do)
+    def __init__(self, err): self.err = err
+    def __del__(self): raise self.err
+
+LateCallback(RuntimeError("Event loop is closed"))
+LateCallback(ValueError("a real bug"))
+"""
+
+
+@pytest.mark.parametrize("quiet", [True, False])
+def test_quiet_drops_only_the_closed_event_loop_reports(quiet):
+    err = subprocess.run([sys.executable, "-c", QUIET_REPORTS.format(quiet=quiet)], capture_output=True,
+                         text=True, timeout=120).stderr
+    assert "a real bug" in err
+    assert ("Event loop is closed" in err) is not quiet, err

@@ -87,13 +87,13 @@ def set_quiet(quiet: bool) -> None:
     """Whether a failed save is only the run's one-line report (train.py) or also orbax's and tensorstore's
     own reports (--debug). Besides a save's own stderr (`_quiet`), quiet drops what they print outside
     it: orbax's log of the failed background write, and the "Event loop is closed" tracebacks of
-    tensorstore's late callbacks into the event loop orbax closed (through sys.excepthook)."""
+    tensorstore's late callbacks into the event loop orbax closed (reported through sys.unraisablehook)."""
     global QUIET
     QUIET = quiet
     logging.getLogger("absl").addFilter(_RAISED_WRITE_ERRORS)  # the same filter once, however often called
-    if sys.excepthook is not _excepthook:
-        global _default_excepthook
-        _default_excepthook, sys.excepthook = sys.excepthook, _excepthook
+    if sys.unraisablehook is not _unraisablehook:
+        global _default_unraisablehook
+        _default_unraisablehook, sys.unraisablehook = sys.unraisablehook, _unraisablehook
 
 
 class _DropRaisedWriteErrors(logging.Filter):
@@ -105,12 +105,12 @@ class _DropRaisedWriteErrors(logging.Filter):
 
 
 _RAISED_WRITE_ERRORS = _DropRaisedWriteErrors()
-_default_excepthook = sys.excepthook
+_default_unraisablehook = sys.unraisablehook
 
 
-def _excepthook(kind, value, traceback) -> None:
-    if not (QUIET and kind is RuntimeError and str(value) == "Event loop is closed"):
-        _default_excepthook(kind, value, traceback)
+def _unraisablehook(unraisable) -> None:
+    if not (QUIET and unraisable.exc_type is RuntimeError and str(unraisable.exc_value) == "Event loop is closed"):
+        _default_unraisablehook(unraisable)
 
 
 @contextlib.contextmanager
