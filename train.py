@@ -31,7 +31,7 @@ from envs_jax import registered
 from jaxbridge.commands import train as command
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import PRESETS
-from jaxbridge.learn.approaches import APPROACHES
+from jaxbridge.learn.approaches import APPROACHES, KNOWN, LOW_LEVEL
 from jaxbridge.learn.devices import configure_cpu_devices, device_count_arg, select_devices
 from jaxbridge.utils import compile_cache, distributed
 from jaxbridge.utils.cli import ArgumentParser, UsageError, non_negative_int, positive_float, positive_int, run_main
@@ -44,10 +44,10 @@ def approach_list(text: str) -> list[str]:
     if text.strip() == "all":
         return list(APPROACHES)
     names = [n.strip() for n in text.split(",") if n.strip()]
-    unknown = [n for n in names if n not in APPROACHES]
+    unknown = [n for n in names if n not in KNOWN]
     if unknown or not names:
         raise argparse.ArgumentTypeError(f"unknown approach {', '.join(unknown) or repr(text)}; "
-                                         f"choose from all, {', '.join(APPROACHES)}")
+                                         f"choose from all, {', '.join(KNOWN)}")
     if len(set(names)) != len(names):
         raise argparse.ArgumentTypeError(f"an approach is listed twice in {text!r}")
     return names
@@ -70,7 +70,8 @@ def parse_args(argv):
                         "env's first)")
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: all, the paper's six: "
-                        f"{', '.join(APPROACHES)}; doorknobs: all but no_feature_selection and maple_q)")
+                        f"{', '.join(APPROACHES)}; doorknobs: all but no_feature_selection and maple_q); the "
+                        f"low-level baselines on brax, only by name: {', '.join(LOW_LEVEL)}")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,
@@ -88,6 +89,9 @@ def parse_args(argv):
     p.add_argument("--call-planner-bonus", type=float,
                    help=f"extra reward when CallPlanner reaches the goal (the authors' code: 0.5; default: "
                         f"{d.call_planner_bonus}, doorknobs 0.5; see docs/RESULTS.md)")
+    p.add_argument("--low-level-budget", type=positive_int,
+                   help="agent steps per cycle of the low-level baselines, in units of ours' env steps per cycle "
+                        f"(episodes x train steps): 1 is the paper's budget, 100 a large one (default: {d.low_level_budget})")
     p.add_argument("--checkpoint-every", type=positive_int,
                    help=f"save the learner state every N cycles and at the end (default: {d.checkpoint_every})")
     p.add_argument("--sweep", action="append", default=None, metavar="KEY=V1,V2,...",

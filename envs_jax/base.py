@@ -54,10 +54,12 @@ class BridgeObs:
 
 @struct.dataclass
 class BridgeAction:
-    """A bridge's choice: a skill (num_skills = CallPlanner) and its continuous parameter."""
+    """A bridge's choice: a skill (num_skills = CallPlanner) and its continuous parameter; a low-level
+    bridge (Controls.low_level) gives the env's raw action instead of a skill, or CallPlanner."""
 
     skill: jax.Array  # int32
     param: jax.Array  # float32
+    action: jax.Array | None = None  # float32[A]: a low-level bridge's raw action
 
 
 @dataclass(frozen=True)
@@ -232,6 +234,12 @@ class NoveltyEnv(abc.ABC):
         """Whether `full_state` can hold every object of this env's capacity (S is fixed by the largest
         test task, so larger sweep tasks are beyond the full-state ablations' input)."""
         return True
+
+    def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """float32[A] low and high: the box the low-level baselines act in (every skill's action lies in
+        it); where the authors' action space is unbounded, the range past which an action changes nothing
+        more. Optional: an env without it has no low-level baselines."""
+        raise NotImplementedError(f"env {self.name!r} states no action bounds (the low-level baselines need them)")
 
     # ---- device: skills ----------------------------------------------------------------------------
     @abc.abstractmethod

@@ -192,6 +192,9 @@ class Coffee(NoveltyEnv):
         # robot, jug and machine, and each cup's liquid; the cups' places, capacities and targets are the task's
         return np.concatenate([np.arange(12), 12 + 5 * np.arange(MAX_CUPS) + 4])
 
+    def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return -np.ones(self.action_dim, np.float32), np.ones(self.action_dim, np.float32)  # the authors' box
+
     def full_state(self, state: State) -> jax.Array:
         """float32[32]: robot (x, y, z, tilt, wrist, fingers); jug (x, y, rot, held, filled); machine (on);
         per cup (x, y, capacity, target, current), zeros for absent cups, padded to 4 cups."""

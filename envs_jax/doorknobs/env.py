@@ -271,6 +271,11 @@ class Doorknobs(NoveltyEnv):
         return state.replace(robot=jnp.where(blocked, state.robot, moved), knob_rot=rot,
                              door_open=state.door_open | opens)
 
+    def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        # The authors' box: dx, dy within ACTION_MAGNITUDE; drot unbounded, but a knob clips to [0, 1].
+        bound = np.array([ACTION_MAGNITUDE, ACTION_MAGNITUDE, 1.0], np.float32)
+        return -bound, bound
+
     def state_vector(self, state: State) -> jax.Array:
         return jnp.concatenate([state.robot, state.knob_rot, state.door_open.astype(jnp.float32)])
 

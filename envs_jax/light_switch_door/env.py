@@ -331,6 +331,12 @@ class LightSwitchDoor(NoveltyEnv):
                                   jnp.where(has_door[:, None], doors, 0.0).reshape(-1)])
         return jnp.pad(vector, (0, self.full_state_size - vector.shape[0]))
 
+    def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        # The authors' box is unbounded: a move past the row's ends is clipped to it and keys clip to
+        # [0, 1]. dlight acts only at exactly LIGHT_SWITCH_VALUE, a point no continuous policy samples.
+        bound = np.array([self.max_task_cells, 1.0, 1.0, 1.0], np.float32)  # one box for every capacity
+        return -bound, bound
+
     # ---- device: skills (all singleton: one action, then terminate) ----------------------------
     def skill_action(self, state: State, call: SkillCall) -> jax.Array:
         dx = self._cell_centres()[call.slot] - state.robot_x

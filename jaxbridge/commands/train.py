@@ -19,7 +19,8 @@ from jaxbridge.utils.stats import cell_text
 
 # train.py flags that set the run's config (flag name = config field); --resume takes the saved config.
 CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "num_seeds", "first_seed", "cycles", "episodes_per_cycle",
-                "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus", "checkpoint_every", "seed_block")
+                "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus", "checkpoint_every", "seed_block",
+                "low_level_budget")
 
 
 def make_config(flags: dict) -> tuple[TrainConfig, type]:

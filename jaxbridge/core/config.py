@@ -10,8 +10,8 @@ from dataclasses import dataclass
 # `target_init`, `reset_optimizer`, `explore_ground_operators` (older runs were the jaxbridge preset,
 # which their defaults are); 5: `output_init` (older runs started their output layer at zero); 6:
 # `env_quirks`, `normalise`, `fit_patience`, `param_samples` (older runs had none of them: their defaults);
-# 7: `loop_guard` (older runs had none)
-CONFIG_VERSION = 7
+# 7: `loop_guard` (older runs had none); 8: `low_level_budget` (older runs had no low-level baselines)
+CONFIG_VERSION = 8
 
 
 # The numeric hyperparameters that change no shape or program: pytree leaves of the cycle
@@ -27,7 +27,7 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
           "epsilon_end": (0, 1, True), "epsilon_decay": (0, None, True), "num_seeds": (1, None, True),
           "cycles": (1, None, True), "episodes_per_cycle": (1, None, True), "train_steps": (1, None, True),
           "num_test_tasks": (1, None, True), "updates_per_cycle": (0, None, True), "fit_patience": (0, None, True),
-          "batch_size": (1, None, True),
+          "batch_size": (1, None, True), "low_level_budget": (1, None, True),
           "q_ensemble": (1, None, True), "n_sample": (1, None, True), "n_target_sample": (1, None, True),
           "buffer_capacity": (1, None, True), "checkpoint_every": (1, None, True), "seed_block": (1, None, True),
           "first_seed": (0, None, True)}
@@ -142,6 +142,9 @@ class TrainConfig:
     state (each of which left it unchanged) is not applicable, whatever its grounding or parameter: a
     greedy bridge cannot repeat a skill that does nothing until the horizon. Training and test
     episodes alike, every approach with a bridge (not in the paper; off in the authors' preset)."""
+    low_level_budget: int = 1
+    """Agent steps per cycle of the low-level baselines (low_level_ppo, low_level_sac), in units of ours'
+    env steps per cycle (episodes_per_cycle x train_steps): 1 is the paper's budget."""
     env_quirks: tuple[str, ...] = ()
     """Behaviours of the authors' env that ours departs from, switched back on by name (the env's `quirks`,
     e.g. Coffee's "shared_repeat_flag"); none by default."""
@@ -179,9 +182,9 @@ class TrainConfig:
             data.setdefault("approach", "ours")
         if version in (1, 2):
             data.setdefault("split_task_state", False)
-        elif version not in (3, 4, 5, 6, CONFIG_VERSION):
+        elif version not in (3, 4, 5, 6, 7, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
-        if version != CONFIG_VERSION:  # runs before version 7 had no loop guard
+        if version < 7:  # runs before version 7 had no loop guard
             data.setdefault("loop_guard", False)
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - fields

@@ -48,6 +48,7 @@ class Controls:
     call_planner: bool = True  # False: no CallPlanner; once stuck, the bridge keeps control
     full_state: bool = False  # the bridge sees every object's raw features instead of the selected ones
     loop_guard: bool = False  # a skill that left the state unchanged is not applicable again in that state
+    low_level: bool = False  # the bridge emits the env's raw action each step instead of a skill (brax baselines)
 
 
 def observation_size(env: NoveltyEnv, controls: Controls) -> int:
@@ -92,6 +93,7 @@ class Decision:
     features: jax.Array  # float32[F]: what the bridge saw
     num_ground: jax.Array  # int32[num_skills + 1]: what it could choose from (CallPlanner last)
     no_op_skills: jax.Array  # bool[num_skills]: the loop guard's skills left out of num_ground
+    action: jax.Array  # float32[A]: a low-level bridge's raw action (zeros for skill bridges)
 
 
 @struct.dataclass
@@ -251,24 +253,29 @@ def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any
     choice = bridge(params, obs, key)
     skill = jnp.clip(choice.skill, 0, env.num_skills if controls.call_planner else env.num_skills - 1)
     op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)
+    action = choice.action if controls.low_level else jnp.zeros(env.action_dim, jnp.float32)
     return Decision(skill=skill.astype(jnp.int32), slot=table.op_slot[op], param=choice.param,
-                    features=obs.features, num_ground=num_ground, no_op_skills=no_ops)
+                    features=obs.features, num_ground=num_ground, no_op_skills=no_ops, action=action)
 
 
 def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
-            stuck: jax.Array) -> tuple[Episode, StepRecord]:
-    """Start the bridge's decision if it made one, then take one env step."""
+            stuck: jax.Array, low_level: bool = False) -> tuple[Episode, StepRecord]:
+    """Start the bridge's decision if it made one, then take one env step (a low-level bridge's decision
+    is its raw action for this one step: no skill starts, and it decides again at the next)."""
     state, live = ep.env_state, ~ep.done
     call_planner = decide & (decision.skill >= env.num_skills)
-    start_skill = decide & ~call_planner
+    raw = decide & ~call_planner & low_level
+    start_skill = decide & ~call_planner & ~raw
     bridge_call = SkillCall(skill=decision.skill, slot=decision.slot, param=decision.param,
                             running=jnp.bool_(True), steps=jnp.int32(0))
     call = tree_where(start_skill, bridge_call, ep.call)
 
     vec = env.state_vector(state)
     action = jnp.where(call_planner, 0.0, env.skill_action(state, call))  # CallPlanner: a no-op step
+    if low_level:
+        action = jnp.where(raw, decision.action, action)
     next_state = tree_where(live, env.step(state, action), state)
-    acted = live & ~call_planner & call.running  # a skill's policy chose this step's action
+    acted = live & ~call_planner & ~raw & call.running  # a skill's policy chose this step's action
     next_state = tree_where(acted, env.after_skill_step(state, next_state, call), next_state)
     finished = env.skill_done(state, next_state, call)
     planner_acted = live & (ep.control == PLANNER)
@@ -313,6 +320,50 @@ def no_plan(num_episodes: int, words: int) -> PlanLookup:
                       next_key=jnp.zeros((num_episodes, words), jnp.uint32), miss=jnp.zeros(num_episodes, bool))
 
 
+@struct.dataclass
+class PlannerTurn:
+    """A batch of episodes after steps 1-3 of a meta-policy step, before the bridge's turn."""
+
+    episodes: Episode
+    atoms: jax.Array  # uint32[B, W]: the packed abstract states
+    decide: jax.Array  # bool[B]: the bridge must choose now
+    stuck: jax.Array  # bool[B]: the planner got stuck at this state
+
+
+def planner_step(env: NoveltyEnv, controls: Controls, tables: PlanTable, episodes: Episode,
+                 param_uniforms: jax.Array, host_planner: bool = True) -> PlannerTurn:
+    """Steps 1-3 on a batch: observe, look the plan up, the planner's turn."""
+    episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
+    if controls.planner:
+        plan = batched_plan_lookup(tables, packed, need_plan, host_planner)
+    else:  # pure RL: the control never returns to a planner, nothing is looked up
+        plan = no_plan(packed.shape[0], packed.shape[-1])
+    stuck_before = episodes.stuck_events
+    episodes, decide = jax.vmap(partial(planner_turn, env))(episodes, packed, plan, tables, param_uniforms)
+    return PlannerTurn(episodes, packed, decide, episodes.stuck_events > stuck_before)
+
+
+def bridge_step(env: NoveltyEnv, controls: Controls, bridge: Bridge, bridge_params: Any, tables: PlanTable,
+                turn: PlannerTurn, choice_bits: jax.Array, bridge_keys: jax.Array, groups: jax.Array,
+                shared_params: bool = False) -> tuple[Episode, StepRecord]:
+    """Steps 4-5 on a batch: the bridge's turn where it must choose, then one env step."""
+    episodes, num_episodes = turn.episodes, turn.decide.shape[0]
+    no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
+                           param=jnp.zeros(num_episodes, jnp.float32),
+                           features=jnp.zeros((num_episodes, observation_size(env, controls)), jnp.float32),
+                           num_ground=jnp.zeros((num_episodes, env.num_skills + 1), jnp.int32),
+                           no_op_skills=jnp.zeros((num_episodes, env.num_skills), bool),
+                           action=jnp.zeros((num_episodes, env.action_dim), jnp.float32))
+    decision = jax.lax.cond(  # the bridge only runs on steps where some episode must choose
+        jnp.any(turn.decide),
+        lambda: jax.vmap(partial(bridge_turn, env, controls, bridge), in_axes=(None if shared_params else 0,) + (0,) * 5)(
+            bridge_params, episodes, tables, turn.atoms, bridge_keys, choice_bits),
+        lambda: no_decision)
+    episodes, rec = jax.vmap(partial(execute, env, low_level=controls.low_level))(episodes, turn.decide, decision,
+                                                                                  turn.stuck)
+    return episodes.replace(env_state=env.share_between_episodes(episodes.env_state, groups)), rec
+
+
 @partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls", "shared_params", "host_planner"))
 def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArrays, keys: jax.Array,
             max_steps: int, record: bool = False, controls: Controls = Controls(), shared_params: bool = False,
@@ -333,30 +384,12 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArra
     num_episodes = horizons.shape[0]
     groups = jnp.zeros(num_episodes, jnp.int32) if groups is None else groups
     episodes = jax.vmap(partial(start_episode, env, controls))(tasks, horizons)
-    no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
-                           param=jnp.zeros(num_episodes, jnp.float32),
-                           features=jnp.zeros((num_episodes, observation_size(env, controls)), jnp.float32),
-                           num_ground=jnp.zeros((num_episodes, env.num_skills + 1), jnp.int32),
-                           no_op_skills=jnp.zeros((num_episodes, env.num_skills), bool))
 
     def step(episodes: Episode, randomness):
         param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]
-        episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
-        if controls.planner:
-            plan = batched_plan_lookup(tables, packed, need_plan, host_planner)
-        else:  # pure RL: the control never returns to a planner, nothing is looked up
-            plan = no_plan(num_episodes, packed.shape[-1])
-        stuck_before = episodes.stuck_events
-        episodes, decide = jax.vmap(partial(planner_turn, env))(episodes, packed, plan, tables,
-                                                                param_uniforms)
-        decision = jax.lax.cond(  # the bridge only runs on steps where some episode must choose
-            jnp.any(decide),
-            lambda: jax.vmap(partial(bridge_turn, env, controls, bridge), in_axes=(None if shared_params else 0,) + (0,) * 5)(
-                bridge_params, episodes, tables, packed, bridge_keys, choice_bits),
-            lambda: no_decision)
-        stuck = episodes.stuck_events > stuck_before
-        episodes, rec = jax.vmap(partial(execute, env))(episodes, decide, decision, stuck)
-        episodes = episodes.replace(env_state=env.share_between_episodes(episodes.env_state, groups))
+        turn = planner_step(env, controls, tables, episodes, param_uniforms, host_planner)
+        episodes, rec = bridge_step(env, controls, bridge, bridge_params, tables, turn, choice_bits, bridge_keys,
+                                    groups, shared_params)
         return episodes, (rec if record else None)
 
     randomness = step_randomness(keys, max_steps)

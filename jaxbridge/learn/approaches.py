@@ -19,13 +19,19 @@ from jaxbridge.learn.q_bridge import QBridge, QNetwork
 class Approach:
     name: str
     label: str  # as in the paper's figures
-    bridge: str  # "q": the learned bridge; "random": uniformly random; "none": re-plan when stuck
+    bridge: str  # "q": the learned bridge; "random": uniformly random; "none": re-plan when stuck;
+    # "low_level": a brax agent emitting raw actions (learn/low_level; trained by run/low_level_runs)
     controls: Controls = Controls()
     description: str = ""
+    algorithm: str = ""  # the low-level baselines' brax trainer ("ppo" or "sac")
 
     @property
     def learns(self) -> bool:
-        return self.bridge == "q"
+        return self.bridge in ("q", "low_level")
+
+    @property
+    def low_level(self) -> bool:
+        return self.bridge == "low_level"
 
     def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int,
                     explore_ground_operators: bool = False, stratified: bool = True) -> Bridge:
@@ -59,7 +65,20 @@ APPROACHES = {a.name: a for a in (
 )}
 
 
+# The baseline the paper argues from but never ran (issue 22): low-level continuous RL from the stuck
+# state with brax's agents, without and with a CallPlanner action dimension. Not among "all".
+LOW_LEVEL = {a.name: a for a in (
+    Approach(f"low_level_{algorithm}{suffix}", f"low-level {algorithm.upper()}{label}", "low_level",
+             Controls(call_planner=bool(suffix), low_level=True),
+             f"brax {algorithm.upper()} from the stuck state on the env's raw actions{what}", algorithm)
+    for algorithm in ("ppo", "sac")
+    for suffix, label, what in (("", "", ""), ("_callplanner", " + CallPlanner",
+                                                 "; one more action dimension hands control to the planner")))}
+
+KNOWN = {**APPROACHES, **LOW_LEVEL}
+
+
 def get_approach(name: str) -> Approach:
-    if name not in APPROACHES:
-        raise ValueError(f"unknown approach {name!r}; choose from {', '.join(APPROACHES)}")
-    return APPROACHES[name]
+    if name not in KNOWN:
+        raise ValueError(f"unknown approach {name!r}; choose from {', '.join(KNOWN)}")
+    return KNOWN[name]

@@ -113,9 +113,14 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         if not started and primary:
             for run_dir in run_dirs:
                 rundir.fresh(run_dir)
+        setup = make_setup(named[program[0]], env_cls)
+        if setup.approach.low_level:  # brax's trainers: one run, seed after seed, no checkpoints
+            from jaxbridge.run.low_level_runs import train_low_level  # brax: imported only when used
+            return [train_low_level(make_setup(named[n], env_cls), experiment_dir / n, bar=bar, stop=stop)
+                    for n in program]
         share = device_shares.get()
         try:
-            return train_settings(make_setup(named[program[0]], env_cls), [(named[n], experiment_dir / n) for n in program],
+            return train_settings(setup, [(named[n], experiment_dir / n) for n in program],
                                   resume=started, bar=bar, stop=stop, devices=share, trained=trained,
                                   tensorboard=tensorboard)
         finally:

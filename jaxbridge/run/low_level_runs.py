@@ -1,0 +1,107 @@
+"""The host side of a low-level baseline's run (learn/low_level): its seeds one after another, each trained
+by brax and evaluated after every cycle's agent steps, into the same run files as every approach's
+(metrics.csv, summary.json, curves.png). No checkpoints: an interrupted run trains again from its start."""
+from __future__ import annotations
+
+import json
+import threading
+import time
+from pathlib import Path
+
+import jax
+import numpy as np
+
+from jaxbridge.learn.brax_env import BridgeEnv, low_level_controls
+from jaxbridge.learn.low_level import TRAINERS, Budget, evaluate
+from jaxbridge.learn.online import CycleMetrics
+from jaxbridge.learn.setup import Setup
+from jaxbridge.run import artifacts
+from jaxbridge.run.runner import Interrupted
+from jaxbridge.utils.distributed import is_primary
+from jaxbridge.utils.files import write_atomic
+from jaxbridge.utils.progress import cycle_progress
+
+
+def _of_seed(batch, seed: int):
+    """The device arrays of `seed`'s episodes in a seed-major TaskBatch."""
+    index = np.flatnonzero(batch.seeds == seed)
+    return jax.tree.map(lambda x: x[index], batch.arrays)
+
+
+def train_seed(setup: Setup, seed: int, on_cycle=None) -> list[dict]:
+    """One seed: brax's agent from the stuck state of the seed's training task; after each cycle's agent
+    steps, its greedy policy on the seed's test tasks and on its training task. One dict per cycle."""
+    config, approach = setup.config, setup.approach
+    controls = low_level_controls(approach.controls.call_planner, approach.controls.full_state)
+    train_arrays, test_arrays = _of_seed(setup.train, seed), _of_seed(setup.test, seed)
+    adapter = BridgeEnv(setup.train_env, jax.tree.map(lambda x: x[:1], train_arrays), controls.call_planner,
+                        controls.full_state, key=jax.random.key(seed))
+    budget = Budget(config.cycles, config.episodes_per_cycle * config.train_steps * config.low_level_budget,
+                    config.train_steps)
+    test_keys = jax.random.split(jax.random.key(seed), test_arrays.horizons.shape[0] + 1)
+    rows, last_step = [], 0
+
+    def evaluated(step: int, params) -> None:
+        nonlocal last_step
+        test = evaluate(setup.test_env, approach.algorithm, controls, params, test_arrays, test_keys[1:],
+                        setup.test.max_steps)
+        train = evaluate(setup.train_env, approach.algorithm, controls, params, adapter.task, test_keys[:1],
+                         config.train_steps)
+        rows.append({"test_solve_rate": float(np.mean(test.success)),
+                     "train_success_rate": float(np.mean(train.success)),
+                     "train_env_steps": step - last_step, "train_decisions": step - last_step,
+                     "test_env_steps": int(np.sum(test.steps)),
+                     "table_misses": int(np.sum(test.table_misses) + np.sum(train.table_misses))})
+        last_step = step
+        if on_cycle is not None:
+            on_cycle()
+
+    TRAINERS[approach.algorithm](adapter, budget, seed, evaluated)
+    return rows
+
+
+def _history(per_seed: list[list[dict]]) -> list[CycleMetrics]:
+    zero = np.zeros(len(per_seed), np.float32)
+    field = lambda c, name, dtype: np.asarray([rows[c][name] for rows in per_seed], dtype)
+    return [CycleMetrics(test_solve_rate=field(c, "test_solve_rate", np.float32),
+                         train_success_rate=field(c, "train_success_rate", np.float32),
+                         train_env_steps=field(c, "train_env_steps", np.int32),
+                         train_decisions=field(c, "train_decisions", np.int32),
+                         test_env_steps=field(c, "test_env_steps", np.int32), epsilon=zero, loss=zero,
+                         q_abs_max=zero, buffer_size=zero.astype(np.int32),
+                         table_misses=field(c, "table_misses", np.int32))
+            for c in range(len(per_seed[0]))]
+
+
+def train_low_level(setup: Setup, run_dir: Path, progress: bool = True, bar=None,
+                    stop: threading.Event | None = None) -> dict:
+    """Every seed of the run, then its files; Interrupted (nothing saved) when `stop` is set between seeds.
+    `bar`: a progress display shared with other runs (else its own). Returns the run's summary."""
+    config, start, primary = setup.config, time.perf_counter(), is_primary()
+    if primary:
+        write_atomic(run_dir / "config.json", json.dumps(config.to_dict(), indent=2) + "\n")
+    own_bar = bar is None
+    if own_bar:
+        bar = cycle_progress(config.cycles, f"{config.env} {config.approach} x{config.num_seeds} seeds",
+                             progress and primary)
+    per_seed, evaluations = [], 0
+
+    def evaluated() -> None:  # the bar counts cycles of all seeds: one per num_seeds evaluations
+        nonlocal evaluations
+        evaluations += 1
+        if evaluations % config.num_seeds == 0:
+            bar.update()
+
+    try:
+        for seed in config.seeds:
+            if stop is not None and stop.is_set():
+                raise Interrupted(0, f"interrupted in {config.approach} before seed {seed}; nothing saved")
+            per_seed.append(train_seed(setup, seed, on_cycle=evaluated))
+    finally:
+        if own_bar:
+            bar.close()
+    history = _history(per_seed)
+    info = artifacts.summary(history, config.seeds, time.perf_counter() - start, "1 cpu (brax)")
+    if primary:
+        artifacts.write_run_files(run_dir, config.to_dict(), history, info, label=setup.approach.label)
+    return info
