@@ -44,10 +44,9 @@ def approach_list(text: str) -> list[str]:
     if text.strip() == "all":
         return list(APPROACHES)
     names = [n.strip() for n in text.split(",") if n.strip()]
-    unknown = [n for n in names if n not in KNOWN]
-    if unknown or not names:
-        raise argparse.ArgumentTypeError(f"unknown approach {', '.join(unknown) or repr(text)}; "
-                                         f"choose from all, {', '.join(KNOWN)}")
+    if not names or any(n not in KNOWN for n in names):
+        unknown = ', '.join(n for n in names if n not in KNOWN) or repr(text)
+        raise argparse.ArgumentTypeError(f"unknown approach {unknown}; choose from all, {', '.join(KNOWN)}")
     if len(set(names)) != len(names):
         raise argparse.ArgumentTypeError(f"an approach is listed twice in {text!r}")
     return names
@@ -70,8 +69,8 @@ def parse_args(argv):
                         "env's first)")
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: all, the paper's six: "
-                        f"{', '.join(APPROACHES)}; doorknobs: all but no_feature_selection and maple_q); the "
-                        f"low-level baselines on brax, only by name: {', '.join(LOW_LEVEL)}")
+                        f"{', '.join(APPROACHES)}; doorknobs: all but no_feature_selection and maple_q; by name "
+                        f"only: {', '.join(LOW_LEVEL)})")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,
@@ -89,9 +88,8 @@ def parse_args(argv):
     p.add_argument("--call-planner-bonus", type=float,
                    help=f"extra reward when CallPlanner reaches the goal (the authors' code: 0.5; default: "
                         f"{d.call_planner_bonus}, doorknobs 0.5; see docs/RESULTS.md)")
-    p.add_argument("--low-level-budget", type=positive_int,
-                   help="agent steps per cycle of the low-level baselines, in units of ours' env steps per cycle "
-                        f"(episodes x train steps): 1 is the paper's budget, 100 a large one (default: {d.low_level_budget})")
+    p.add_argument("--low-level-budget", type=positive_int, help="the low-level baselines' agent steps per cycle, in "
+                   f"units of ours' env steps per cycle: 1 is the paper's budget (default: {d.low_level_budget})")
     p.add_argument("--checkpoint-every", type=positive_int,
                    help=f"save the learner state every N cycles and at the end (default: {d.checkpoint_every})")
     p.add_argument("--sweep", action="append", default=None, metavar="KEY=V1,V2,...",

@@ -169,7 +169,7 @@ def report(name: str, info: dict) -> str:
     """One approach's summary line: means over seeds with their 95% intervals."""
     at = info["test_solve_rate_at"]
     last = max((int(c) for c in at), default=None)
-    return (f"{name:>20}: mean test solve rate at the last cycle {info['per_cycle']['test_solve_rate']['mean'][-1]:.2f}; "
+    return (f"{name:>25}: mean test solve rate at the last cycle {info['per_cycle']['test_solve_rate']['mean'][-1]:.2f}; "
             f"smooth reward at cycle {info['cycles']}: {cell_text(info['smooth_reward_final'])}"
             + (f"; at cycle {last}: {cell_text(at[str(last)])}" if last else "")
             + f" (95% CIs over seeds {info['seed_range']}; {info['elapsed_s']:.0f} s)")
