@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 from run_helpers import train
 
+from bench.low_level import main as low_level_table
+
 from envs_jax import env_class
 from envs_jax.base import BridgeAction, BridgeObs
 from jaxbridge.core.meta_policy import rollout
@@ -140,7 +142,7 @@ def test_a_policy_bridge_acts_by_its_networks_mode_within_the_env_bounds():
     np.testing.assert_allclose(choice.action, expected, rtol=1e-5, atol=1e-6)
 
 
-def test_train_runs_ours_and_a_low_level_baseline_into_one_table(tmp_path):
+def test_train_runs_ours_and_a_low_level_baseline_into_one_table(tmp_path, capsys):
     proc = train("--env", "light_switch_door", "--approaches", "ours,low_level_ppo", "--num-seeds", "2",
                  "--cycles", "3", "--no-progress", "--out", str(tmp_path), "--name", "ll", timeout=600)
     assert proc.returncode == 0, proc.stderr
@@ -152,3 +154,10 @@ def test_train_runs_ours_and_a_low_level_baseline_into_one_table(tmp_path):
     assert all(int(r["train_env_steps"]) == 500 for r in rows)  # the paper's budget: 5 episodes x 100 steps
     # without CallPlanner it cannot turn the light on (an exact action value): it solves nothing
     assert all(float(r["test_solve_rate"]) == 0.0 for r in rows)
+    # bench.low_level's table: training steps per seed so far, and who ever solved a test task
+    low_level_table([str(tmp_path / "ll")])
+    out = capsys.readouterr().out
+    assert "| low-level PPO | 0-1 | 1,500 | 0.00 | 0.00 | 0/2 |" in out
+    ours = next(line for line in out.splitlines() if line.startswith("| ours | 0-1 |"))
+    steps = sum(int(r["train_env_steps"]) for r in csv.DictReader((tmp_path / "ll" / "ours" / "metrics.csv").open()))
+    assert ours.split(" | ")[2] == f"{steps / 2:,.0f}"
