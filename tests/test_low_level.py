@@ -142,22 +142,36 @@ def test_a_policy_bridge_acts_by_its_networks_mode_within_the_env_bounds():
     np.testing.assert_allclose(choice.action, expected, rtol=1e-5, atol=1e-6)
 
 
-def test_train_runs_ours_and_a_low_level_baseline_into_one_table(tmp_path, capsys):
-    proc = train("--env", "light_switch_door", "--approaches", "ours,low_level_ppo", "--num-seeds", "2",
-                 "--cycles", "3", "--no-progress", "--out", str(tmp_path), "--name", "ll", timeout=600)
+def test_train_runs_ours_and_low_level_baselines_into_one_table_eval_and_resume(tmp_path, capsys, eval_main):
+    proc = train("--env", "light_switch_door", "--approaches", "ours,low_level_ppo,low_level_ppo_callplanner",
+                 "--num-seeds", "2", "--cycles", "3", "--no-progress", "--out", str(tmp_path), "--name", "ll", timeout=600)
     assert proc.returncode == 0, proc.stderr
     assert "warp" not in proc.stdout + proc.stderr  # brax's optional backends stay quiet
-    table = (tmp_path / "ll" / "results.md").read_text()
+    experiment = tmp_path / "ll"
+    table = (experiment / "results.md").read_text()
     assert table.count("| ours | 2 |") == 2 and table.count("| low-level PPO | 2 |") == 2
-    rows = list(csv.DictReader((tmp_path / "ll" / "low_level_ppo" / "metrics.csv").open()))
+    metrics = lambda run: list(csv.DictReader((experiment / run / "metrics.csv").open()))
+    rows = metrics("low_level_ppo")
     assert [(r["seed"], r["cycle"]) for r in rows] == [(s, c) for s in "01" for c in "123"]
     assert all(int(r["train_env_steps"]) == 500 for r in rows)  # the paper's budget: 5 episodes x 100 steps
     # without CallPlanner it cannot turn the light on (an exact action value): it solves nothing
     assert all(float(r["test_solve_rate"]) == 0.0 for r in rows)
+    # eval.py loads the last policies and finds each seed's last test solve rate again
+    assert eval_main([str(experiment), "--approach", "low_level_ppo_callplanner"]) == 0
+    out = capsys.readouterr().out
+    last = {r["seed"]: float(r["test_solve_rate"]) for r in metrics("low_level_ppo_callplanner") if r["cycle"] == "3"}
+    for seed in "01":
+        row = next(line.split() for line in out.splitlines() if line.split()[:1] == [seed])
+        assert float(row[-6]) == last[seed]  # solve rate, then steps, calls, stuck, decisions, misses
+    # --resume keeps finished low-level runs as they are
+    before = (experiment / "low_level_ppo_callplanner" / "metrics.csv").read_bytes()
+    resumed = train("--resume", str(experiment), "--no-progress", timeout=600)
+    assert resumed.returncode == 0, resumed.stderr
+    assert (experiment / "low_level_ppo_callplanner" / "metrics.csv").read_bytes() == before
     # bench.low_level's table: training steps per seed so far, and who ever solved a test task
-    low_level_table([str(tmp_path / "ll")])
+    low_level_table([str(experiment)])
     out = capsys.readouterr().out
     assert "| low-level PPO | 0-1 | 1,500 | 0.00 | 0.00 | 0/2 |" in out
     ours = next(line for line in out.splitlines() if line.startswith("| ours | 0-1 |"))
-    steps = sum(int(r["train_env_steps"]) for r in csv.DictReader((tmp_path / "ll" / "ours" / "metrics.csv").open()))
+    steps = sum(int(r["train_env_steps"]) for r in metrics("ours"))
     assert ours.split(" | ")[2] == f"{steps / 2:,.0f}"

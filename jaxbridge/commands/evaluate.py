@@ -13,7 +13,7 @@ from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import Controls
 from jaxbridge.core.presets import default_test_protocol
 from jaxbridge.core.tasks import evaluation_specs, make_batch
-from jaxbridge.learn.approaches import APPROACHES
+from jaxbridge.learn.approaches import KNOWN
 from jaxbridge.run.checkpoint import CheckpointError
 from jaxbridge.run.comparison import run_labels
 from jaxbridge.run.memory import TooBig, check_evaluation
@@ -189,7 +189,7 @@ def sweep_lines(args) -> dict[str, Path]:
         held = held_runs(args.runs[0])
         if not held:
             raise UsageError(f"{args.runs[0]} holds no runs yet")
-        order = [name for a in APPROACHES for name in held if name.partition("@")[0] == a]  # with sweeps' settings
+        order = [name for a in KNOWN for name in held if name.partition("@")[0] == a]  # with sweeps' settings
         return {label: args.runs[0] / name for name, label in run_labels(order).items()}
     return {str(given): run_directory(given, args.approach) for given in args.runs}
 

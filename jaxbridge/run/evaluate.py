@@ -113,6 +113,10 @@ class TrainedPolicy:
         if not set(batch.seeds.tolist()) <= index.keys():
             raise ValueError(f"the batch has tasks of seeds this run did not train ({self.config.seeds})")
         owner = np.array([index[s] for s in batch.seeds.tolist()])
+        if self.approach.low_level:  # brax's (normalizer, policy) params per seed
+            from jaxbridge.learn.low_level import policy_bridge
+            bridge, controls = policy_bridge(batch.env, self.approach)
+            return bridge, jax.tree.map(lambda x: x[owner], self.learners), controls
         bridge = self.setup.bridge(batch.env)
         greedy = episode_params(self.learners, owner, np.zeros(len(owner), np.float32))
         return bridge, greedy, self.setup.controls

@@ -109,15 +109,13 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         if stop.is_set():  # interrupted before this program's turn
             raise Interrupted(0)
         run_dirs = [experiment_dir / name for name in program]
+        setup = make_setup(named[program[0]], env_cls)
+        if setup.approach.low_level:  # brax's trainers: seed after seed, one checkpoint at the end
+            return [train_low_level_run(make_setup(named[n], env_cls), experiment_dir / n) for n in program]
         started = all(checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
         if not started and primary:
             for run_dir in run_dirs:
                 rundir.fresh(run_dir)
-        setup = make_setup(named[program[0]], env_cls)
-        if setup.approach.low_level:  # brax's trainers: one run, seed after seed, no checkpoints
-            from jaxbridge.run.low_level_runs import train_low_level  # brax: imported only when used
-            return [train_low_level(make_setup(named[n], env_cls), experiment_dir / n, bar=bar, stop=stop)
-                    for n in program]
         share = device_shares.get()
         try:
             return train_settings(setup, [(named[n], experiment_dir / n) for n in program],
@@ -125,6 +123,16 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
                                   tensorboard=tensorboard)
         finally:
             device_shares.put(share)
+
+    def train_low_level_run(setup, run_dir: Path) -> dict:
+        from jaxbridge.run import low_level_runs  # brax: imported only when used
+        done = low_level_runs.finished(run_dir, setup.config)
+        if done is not None:
+            bar.update(setup.config.cycles)
+            return done
+        if primary:
+            rundir.fresh(run_dir)
+        return low_level_runs.train_low_level(setup, run_dir, bar=bar, stop=stop)
 
     order, unwritable = sorted(programs, key=lambda p: -COST.get(named[p[0]].approach, 0) * len(p)), False
     try:

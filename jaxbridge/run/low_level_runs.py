@@ -1,6 +1,7 @@
 """The host side of a low-level baseline's run (learn/low_level): its seeds one after another, each trained
 by brax and evaluated after every cycle's agent steps, into the same run files as every approach's
-(metrics.csv, summary.json, curves.png). No checkpoints: an interrupted run trains again from its start."""
+(metrics.csv, summary.json, curves.png) and one checkpoint of every seed's last policy, which eval.py
+loads as it loads any run's. Nothing is saved mid-run: an interrupted run trains again from its start."""
 from __future__ import annotations
 
 import json
@@ -15,8 +16,9 @@ from jaxbridge.learn.brax_env import BridgeEnv, low_level_controls
 from jaxbridge.learn.low_level import TRAINERS, Budget, evaluate
 from jaxbridge.learn.online import CycleMetrics
 from jaxbridge.learn.setup import Setup
-from jaxbridge.run import artifacts
-from jaxbridge.run.runner import Interrupted
+from jaxbridge.learn.devices import describe
+from jaxbridge.run import artifacts, checkpoint
+from jaxbridge.run.runner import Interrupted, checkpoint_record
 from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.files import write_atomic
 from jaxbridge.utils.progress import cycle_progress
@@ -28,9 +30,10 @@ def _of_seed(batch, seed: int):
     return jax.tree.map(lambda x: x[index], batch.arrays)
 
 
-def train_seed(setup: Setup, seed: int, on_cycle=None) -> list[dict]:
+def train_seed(setup: Setup, seed: int, on_cycle=None) -> tuple[list[dict], tuple]:
     """One seed: brax's agent from the stuck state of the seed's training task; after each cycle's agent
-    steps, its greedy policy on the seed's test tasks and on its training task. One dict per cycle."""
+    steps, its greedy policy on the seed's test tasks and on its training task. One dict per cycle, and
+    the last cycle's (normalizer, policy) params."""
     config, approach = setup.config, setup.approach
     controls = low_level_controls(approach.controls.call_planner, approach.controls.full_state)
     train_arrays, test_arrays = _of_seed(setup.train, seed), _of_seed(setup.test, seed)
@@ -39,14 +42,13 @@ def train_seed(setup: Setup, seed: int, on_cycle=None) -> list[dict]:
     budget = Budget(config.cycles, config.episodes_per_cycle * config.train_steps * config.low_level_budget,
                     config.train_steps)
     test_keys = jax.random.split(jax.random.key(seed), test_arrays.horizons.shape[0] + 1)
-    rows, last_step = [], 0
+    rows, last_step, last_params = [], 0, None
 
     def evaluated(step: int, params) -> None:
-        nonlocal last_step
-        test = evaluate(setup.test_env, approach.algorithm, controls, params, test_arrays, test_keys[1:],
-                        setup.test.max_steps)
-        train = evaluate(setup.train_env, approach.algorithm, controls, params, adapter.task, test_keys[:1],
-                         config.train_steps)
+        nonlocal last_step, last_params
+        last_params = params
+        test = evaluate(setup.test_env, approach, params, test_arrays, test_keys[1:], setup.test.max_steps)
+        train = evaluate(setup.train_env, approach, params, adapter.task, test_keys[:1], config.train_steps)
         rows.append({"test_solve_rate": float(np.mean(test.success)),
                      "train_success_rate": float(np.mean(train.success)),
                      "train_env_steps": step - last_step, "train_decisions": step - last_step,
@@ -57,7 +59,7 @@ def train_seed(setup: Setup, seed: int, on_cycle=None) -> list[dict]:
             on_cycle()
 
     TRAINERS[approach.algorithm](adapter, budget, seed, evaluated)
-    return rows
+    return rows, last_params
 
 
 def _history(per_seed: list[list[dict]]) -> list[CycleMetrics]:
@@ -84,7 +86,7 @@ def train_low_level(setup: Setup, run_dir: Path, progress: bool = True, bar=None
     if own_bar:
         bar = cycle_progress(config.cycles, f"{config.env} {config.approach} x{config.num_seeds} seeds",
                              progress and primary)
-    per_seed, evaluations = [], 0
+    per_seed, policies, evaluations = [], [], 0
 
     def evaluated() -> None:  # the bar counts cycles of all seeds: one per num_seeds evaluations
         nonlocal evaluations
@@ -96,12 +98,29 @@ def train_low_level(setup: Setup, run_dir: Path, progress: bool = True, bar=None
         for seed in config.seeds:
             if stop is not None and stop.is_set():
                 raise Interrupted(0, f"interrupted in {config.approach} before seed {seed}; nothing saved")
-            per_seed.append(train_seed(setup, seed, on_cycle=evaluated))
+            rows, params = train_seed(setup, seed, on_cycle=evaluated)
+            per_seed.append(rows)
+            policies.append(params)
+            # brax's trainers compile closures anew per call and jax's caches keep every executable
+            # (2,336 memory maps per seed here): past ~28 seeds a process meets the kernel's 65,530 maps
+            # and LLVM aborts. Other approaches' programs are traced again (compiled from the cache).
+            jax.clear_caches()
     finally:
         if own_bar:
             bar.close()
-    history = _history(per_seed)
-    info = artifacts.summary(history, config.seeds, time.perf_counter() - start, "1 cpu (brax)")
+    history, elapsed = _history(per_seed), time.perf_counter() - start
+    info = artifacts.summary(history, config.seeds, elapsed, describe(jax.local_devices()[:1]))
     if primary:
         artifacts.write_run_files(run_dir, config.to_dict(), history, info, label=setup.approach.label)
+        stacked = jax.tree.map(lambda *x: np.stack([np.asarray(v) for v in x]), *policies)
+        checkpoint.save(run_dir / "checkpoints", config.cycles, stacked, checkpoint_record(config, history, elapsed))
     return info
+
+
+def finished(run_dir: Path, config) -> dict | None:
+    """The summary of a low-level run that completed all its cycles (its checkpoint is of the last), else
+    None: `train.py --resume` keeps finished runs and trains the others again."""
+    done = checkpoint.sealed_steps(run_dir / "checkpoints")
+    if done and done[-1] == config.cycles and (run_dir / "summary.json").is_file():
+        return json.loads((run_dir / "summary.json").read_text())
+    return None

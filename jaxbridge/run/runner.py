@@ -35,7 +35,8 @@ class NumericalFault(Exception):
     """A non-finite loss or Q-value: the run stops, keeping the last good checkpoint."""
 
 
-def _record(config: TrainConfig, history: list[CycleMetrics], elapsed_s: float) -> dict:
+def checkpoint_record(config: TrainConfig, history: list[CycleMetrics], elapsed_s: float) -> dict:
+    """What a checkpoint records beside the state: the config, the cycles so far and their metrics."""
     return {"cycle": len(history), "config": config.to_dict(), "elapsed_s": elapsed_s,
             "history": [{f.name: np.asarray(getattr(m, f.name)).tolist() for f in dataclasses.fields(m)}
                         for m in history]}
@@ -142,7 +143,7 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], progr
         state = slots.unpad(learners)
         for i, (c, run_dir) in enumerate(settings if primary else ()):
             checkpoint.save(run_dir / "checkpoints", len(histories[i]), of_run(state, i),
-                            _record(c, histories[i], elapsed()))
+                            checkpoint_record(c, histories[i], elapsed()))
         last_saved = len(histories[0])
 
     # (learners, histories) after the last completed cycle, replaced in one assignment so that Ctrl-C at
@@ -220,6 +221,11 @@ def load_learners(run_dir: Path) -> tuple[Setup, object, int]:
     config = load_config(run_dir)
     check_checkpoint_belongs(config, run_dir)
     setup = make_setup(config)
-    learners, record, step = checkpoint.restore(run_dir / "checkpoints", setup.init_learners())
+    if setup.approach.low_level:  # brax's policies, stacked over seeds (run/low_level_runs.py)
+        from jaxbridge.learn.low_level import init_policies
+        template = init_policies(setup)
+    else:
+        template = setup.init_learners()
+    learners, record, step = checkpoint.restore(run_dir / "checkpoints", template)
     return setup, learners, step
 
