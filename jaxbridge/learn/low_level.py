@@ -30,9 +30,6 @@ from brax.training.agents.sac import checkpoint as sac_checkpoint
 from brax.training.agents.sac import networks as sac_networks
 from brax.training.agents.sac import train as sac
 
-ALGORITHMS = ("ppo", "sac")
-
-
 def _device_put_replicated(tree, devices):
     """jax 0.10 removed `jax.device_put_replicated`, which brax 0.14's trainers call to give their
     pmapped state its device axis; the trainers here run on one device (max_devices_per_host=1)."""
@@ -96,11 +93,15 @@ class Budget:
 def train_ppo(adapter: BridgeEnv, budget: Budget, seed: int, on_cycle: Callable) -> None:
     """brax PPO, five episodes at a time (ours' episodes per cycle), one update of 4 epochs x 5 minibatches
     per 500 agent steps; `on_cycle(step, params)` after each cycle's steps."""
+    def after_cycle(step, _make_policy, params):  # brax also calls it before training (step 0): skipped
+        if step > 0:
+            on_cycle(step, (params[0], params[1]))  # (normalizer, policy); the value net is not kept
+
     ppo.train(adapter, num_timesteps=budget.total, num_evals=budget.cycles + 1, run_evals=False,
               episode_length=budget.episode_length, num_envs=5, unroll_length=10, batch_size=10,
               num_minibatches=5, num_updates_per_batch=4, learning_rate=3e-4, entropy_cost=1e-2,
               discounting=0.99, normalize_observations=True, max_devices_per_host=1, seed=seed,
-              policy_params_fn=lambda step, _, params: step and on_cycle(step, (params[0], params[1])))
+              policy_params_fn=after_cycle)
 
 
 def train_sac(adapter: BridgeEnv, budget: Budget, seed: int, on_cycle: Callable) -> None:
