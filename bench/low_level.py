@@ -31,8 +31,8 @@ def load_run(run_dir: Path) -> dict:
     approach = get_approach(config["approach"])
     budget = config.get("low_level_budget", 1)
     label = approach.label + (f", {budget}x budget" if approach.low_level and budget != 1 else "")
-    return {"env": config["env"], "label": label, "seeds": seeds, "rates": per_seed("test_solve_rate"),
-            "steps": np.cumsum(per_seed("train_env_steps"), axis=1)}
+    return {"env": config["env"], "label": label, "approach": approach.name, "budget": budget, "seeds": seeds,
+            "rates": per_seed("test_solve_rate"), "steps": np.cumsum(per_seed("train_env_steps"), axis=1)}
 
 
 def summary_row(run: dict) -> list[str]:
@@ -51,13 +51,16 @@ def plot(runs: list[dict], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     envs = [e for e in ENVS if any(r["env"] == e for r in runs)]
+    names = list(dict.fromkeys(r["approach"] for r in runs))  # one colour per approach, in every panel
+    colour = {name: f"C{i}" for i, name in enumerate(names)}
     fig, axes = plt.subplots(1, len(envs), figsize=(5.2 * len(envs), 4.2), sharey=True, squeeze=False)
     for ax, env in zip(axes[0], envs):
         for run in (r for r in runs if r["env"] == env):
             x, rates = run["steps"].mean(axis=0), run["rates"]
             low, high = stats.bootstrap_ci(rates)
-            line, = ax.plot(x, rates.mean(axis=0), label=f"{run['label']} ({len(run['seeds'])} seeds)")
-            ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, lw=0)
+            ax.plot(x, rates.mean(axis=0), color=colour[run["approach"]], ls="-" if run["budget"] == 1 else "--",
+                    label=f"{run['label']} ({len(run['seeds'])} seeds)")
+            ax.fill_between(x, low, high, color=colour[run["approach"]], alpha=0.15, lw=0)
         ax.set_xscale("log")
         ax.set_title(env)
         ax.set_xlabel("training steps per seed (log)")
