@@ -23,10 +23,10 @@ from brax.envs.wrappers.training import wrap  # noqa: E402 -- after brax_env, wh
 from brax.training.acme import running_statistics, specs
 
 
-def adapter(env_name: str, call_planner: bool, seed: int = 0) -> BridgeEnv:
+def adapter(env_name: str, call_planner: bool, seed: int = 0, full_state: bool = False) -> BridgeEnv:
     cls = env_class(env_name)
     batch = make_batch(cls, [cls.train_task(seed)], [seed], horizons=[100])
-    return BridgeEnv(batch.env, batch.arrays, call_planner)
+    return BridgeEnv(batch.env, batch.arrays, call_planner, full_state)
 
 
 def squashed(env, action) -> np.ndarray:
@@ -55,6 +55,16 @@ def test_the_adapter_meets_brax_expectations_under_its_training_wrappers(env_nam
     chex.assert_shape(stepped.obs, (3, view.observation_size))
     chex.assert_shape([stepped.reward, stepped.done], (3,))
     chex.assert_trees_all_equal_shapes_and_dtypes(stepped.pipeline_state, batch.pipeline_state)
+
+
+def test_the_full_state_variant_observes_the_full_state_of_the_stuck_state():
+    view = adapter("doorknobs", call_planner=False, full_state=True)
+    state = view.reset(jax.random.PRNGKey(0))
+    assert view.observation_size == view.env.full_state_size
+    stuck = jax.tree.map(lambda x: x[0], state.pipeline_state.episodes.env_state)
+    np.testing.assert_array_equal(state.obs, view.env.full_state(stuck))
+    assert not np.array_equal(state.obs, np.asarray(view.env.full_state(view.env.reset(
+        jax.tree.map(lambda x: x[0], view.task.tasks)))))  # the planner moved the robot before it got stuck
 
 
 def lsd_oracle(features) -> np.ndarray:

@@ -66,14 +66,16 @@ APPROACHES = {a.name: a for a in (
 
 
 # The baseline the paper argues from but never ran (issue 22): low-level continuous RL from the stuck
-# state with brax's agents, without and with a CallPlanner action dimension. Not among "all".
+# state with brax's agents on ours' features; variants add a CallPlanner action dimension, or see the
+# full state instead. Not among "all".
 LOW_LEVEL = {a.name: a for a in (
     Approach(f"low_level_{algorithm}{suffix}", f"low-level {algorithm.upper()}{label}", "low_level",
-             Controls(call_planner=bool(suffix), low_level=True),
+             Controls(call_planner=suffix == "_callplanner", full_state=suffix == "_full_state", low_level=True),
              f"brax {algorithm.upper()} from the stuck state on the env's raw actions{what}", algorithm)
     for algorithm in ("ppo", "sac")
-    for suffix, label, what in (("", "", ""), ("_callplanner", " + CallPlanner",
-                                                 "; one more action dimension hands control to the planner")))}
+    for suffix, label, what in (("", "", ""),
+                                ("_callplanner", " + CallPlanner", "; one more action dimension hands control to the planner"),
+                                ("_full_state", ", full state", "; it sees every object's raw features")))}
 
 KNOWN = {**APPROACHES, **LOW_LEVEL}
 
