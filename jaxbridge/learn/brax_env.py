@@ -17,9 +17,9 @@ import contextlib
 import io
 from dataclasses import dataclass
 from functools import partial
+
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv
 from jaxbridge.core.meta_policy import (Controls, PlannerTurn, bridge_step, observation, observation_size,
@@ -32,6 +32,11 @@ with contextlib.redirect_stdout(io.StringIO()):  # brax prints its optional GPU 
 
 def low_level_controls(call_planner: bool, full_state: bool = False) -> Controls:
     return Controls(call_planner=call_planner, full_state=full_state, low_level=True)
+
+
+def agent_action_size(env: NoveltyEnv, call_planner: bool) -> int:
+    """The agent's action: the env's, and one more entry for CallPlanner where it has it."""
+    return env.action_dim + int(call_planner)
 
 
 def scaled_choice(env: NoveltyEnv, squashed: jax.Array, can_call: jax.Array, call_planner: bool) -> BridgeAction:
@@ -66,7 +71,7 @@ def _advance(env: NoveltyEnv, controls: Controls, tables, turn: PlannerTurn, key
 
     def one(turn: PlannerTurn, i, params) -> PlannerTurn:
         uniforms, bits, keys = step_randomness(jax.random.fold_in(key, i)[None], 1)
-        params = jnp.zeros((1, env.action_dim + controls.call_planner)) if params is None else params[None]
+        params = jnp.zeros((1, agent_action_size(env, controls.call_planner))) if params is None else params[None]
         episodes, _ = bridge_step(env, controls, bridge, params, tables, turn, bits[0], keys[0], groups)
         return planner_step(env, controls, tables, episodes, uniforms[0], host_planner=False)
 
@@ -99,7 +104,7 @@ class BridgeEnv(Env):
 
     @property
     def action_size(self) -> int:
-        return self.env.action_dim + int(self.controls.call_planner)
+        return agent_action_size(self.env, self.controls.call_planner)
 
     @property
     def backend(self) -> str:
@@ -121,14 +126,3 @@ class BridgeEnv(Env):
         turn = _advance(self.env, self.controls, self.task.tables, state.pipeline_state, now, action)
         reward = (turn.episodes.success[0] & ~before).astype(jnp.float32)
         return self._state(turn, reward, {**state.info, "key": key}, state.metrics)  # wrappers add entries
-
-
-def stuck_observation(adapter: BridgeEnv) -> np.ndarray:
-    """What the agent sees first (tests, diagnostics)."""
-    return np.asarray(adapter.reset(jax.random.key(0)).obs)
-
-
-def task_arrays_of(batch, index: int) -> TaskArrays:
-    """Episode `index` of a TaskBatch's device arrays, with a leading axis of 1."""
-    return jax.tree.map(lambda x: x[index:index + 1], batch.arrays)
-

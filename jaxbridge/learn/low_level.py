@@ -21,7 +21,7 @@ import jax.numpy as jnp
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv
 from jaxbridge.core.meta_policy import Controls, observation_size, rollout
 from jaxbridge.core.tasks import TaskArrays
-from jaxbridge.learn.brax_env import BridgeEnv, low_level_controls, scaled_choice
+from jaxbridge.learn.brax_env import BridgeEnv, agent_action_size, scaled_choice
 
 from brax.training.acme import running_statistics, specs  # after brax_env, which imports brax quietly
 from brax.training.agents.ppo import networks as ppo_networks
@@ -29,6 +29,7 @@ from brax.training.agents.ppo import train as ppo
 from brax.training.agents.sac import checkpoint as sac_checkpoint
 from brax.training.agents.sac import networks as sac_networks
 from brax.training.agents.sac import train as sac
+
 
 def _device_put_replicated(tree, devices):
     """jax 0.10 removed `jax.device_put_replicated`, which brax 0.14's trainers call to give their
@@ -60,7 +61,7 @@ class PolicyBridge:
     obs_size: int
 
     def __call__(self, params, obs: BridgeObs, key: jax.Array) -> BridgeAction:
-        nets = _networks(self.algorithm, self.obs_size, self.env.action_dim + int(self.call_planner))
+        nets = _networks(self.algorithm, self.obs_size, agent_action_size(self.env, self.call_planner))
         logits = nets.policy_network.apply(params[0], params[1], obs.features)
         squashed = nets.parametric_action_distribution.mode(logits)
         return scaled_choice(self.env, squashed, obs.num_ground[-1] > 0, self.call_planner)
@@ -71,7 +72,7 @@ def init_policies(setup) -> tuple:
     shapes a low-level run's checkpoint restores into."""
     approach = setup.approach
     obs_size = observation_size(setup.train_env, approach.controls)
-    nets = _networks(approach.algorithm, obs_size, setup.train_env.action_dim + int(approach.controls.call_planner))
+    nets = _networks(approach.algorithm, obs_size, agent_action_size(setup.train_env, approach.controls.call_planner))
     one = lambda seed: (running_statistics.init_state(specs.Array((obs_size,), jnp.float32)),
                         nets.policy_network.init(jax.random.PRNGKey(seed)))
     return jax.tree.map(lambda *x: jnp.stack(x), *[one(s) for s in setup.config.seeds])
@@ -125,7 +126,7 @@ TRAINERS = {"ppo": train_ppo, "sac": train_sac}
 
 def policy_bridge(env: NoveltyEnv, approach) -> tuple[PolicyBridge, Controls]:
     """A low-level approach's trained agent as the meta-policy's bridge on `env`, with its controls."""
-    controls = low_level_controls(approach.controls.call_planner, approach.controls.full_state)
+    controls = approach.controls  # a low-level approach's controls are the brax view's
     return PolicyBridge(env, approach.algorithm, controls.call_planner, observation_size(env, controls)), controls
 
 

@@ -12,11 +12,11 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from jaxbridge.learn.brax_env import BridgeEnv, low_level_controls
+from jaxbridge.learn.brax_env import BridgeEnv
+from jaxbridge.learn.devices import describe
 from jaxbridge.learn.low_level import TRAINERS, Budget, evaluate
 from jaxbridge.learn.online import CycleMetrics
 from jaxbridge.learn.setup import Setup
-from jaxbridge.learn.devices import describe
 from jaxbridge.run import artifacts, checkpoint
 from jaxbridge.run.runner import Interrupted, checkpoint_record
 from jaxbridge.utils.distributed import is_primary
@@ -35,7 +35,7 @@ def train_seed(setup: Setup, seed: int, on_cycle=None) -> tuple[list[dict], tupl
     steps, its greedy policy on the seed's test tasks and on its training task. One dict per cycle, and
     the last cycle's (normalizer, policy) params."""
     config, approach = setup.config, setup.approach
-    controls = low_level_controls(approach.controls.call_planner, approach.controls.full_state)
+    controls = approach.controls  # a low-level approach's controls are the brax view's
     train_arrays, test_arrays = _of_seed(setup.train, seed), _of_seed(setup.test, seed)
     adapter = BridgeEnv(setup.train_env, jax.tree.map(lambda x: x[:1], train_arrays), controls.call_planner,
                         controls.full_state, key=jax.random.key(seed))
