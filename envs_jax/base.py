@@ -255,12 +255,17 @@ class NoveltyEnv(abc.ABC):
         checked by the planner model; envs whose skills need more (a motion plan) override this."""
         return jnp.ones(jnp.broadcast_shapes(skill.shape, slot.shape), bool)
 
+    @classmethod
+    def check_quirks(cls, names) -> None:
+        """ValueError naming the first of `names` that is not one of this env's `quirks`."""
+        unknown = [n for n in names if n not in cls.quirks]
+        if unknown:
+            known = ", ".join(f"{k} ({v})" for k, v in cls.quirks.items()) or "none"
+            raise ValueError(f"env {cls.name!r} has no quirk {unknown[0]!r} (its quirks: {known})")
+
     def with_quirks(self, names) -> "NoveltyEnv":
         """This env with the named `quirks` switched on; ValueError for a name it does not have."""
-        unknown = [n for n in names if n not in self.quirks]
-        if unknown:
-            known = ", ".join(self.quirks) or "none"
-            raise ValueError(f"env {self.name!r} has no quirk {unknown[0]!r} (its quirks: {known})")
+        self.check_quirks(names)
         return dataclasses.replace(self, **{n: True for n in names}) if names else self
 
     # ---- optional hooks ----------------------------------------------------------------------------

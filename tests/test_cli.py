@@ -182,6 +182,7 @@ def test_an_existing_run_is_not_overwritten(short_run):
     (["train.py", "--num-seeds", "3", "--seed-block", "4"], "--seed-block 4 is larger than the 3 seeds"),
     (["train.py", "--seed-block", "0"], "positive integer"),
     (["train.py", "--preset", "theirs"], "invalid choice: 'theirs'"),
+    (["train.py", "--env", "doorknobs", "--env-quirks", "raw_offsets,bogus"], "has no quirk 'bogus' (its quirks: raw_offsets"),
     (["train.py", "--env", "doorknobs", "--test-protocol", "authors"], "--test-protocol 'authors': doorknobs has jaxbridge"),
     (["eval.py", "--env", "doorknobs", "--test-protocol", "authors"], "doorknobs has no test protocol 'authors'"),
     (["eval.py", "--bridge", "clever"], "invalid choice"),

@@ -33,10 +33,10 @@ def make_config(flags: dict) -> tuple[TrainConfig, type]:
         config = TrainConfig(env=spec, **{**preset_values(given.pop("preset", TrainConfig.preset), env_cls), **given})
     except ValueError as err:  # a value out of its range, e.g. a negative bonus
         raise UsageError(str(err)) from None
-    unknown = [q for q in config.env_quirks if q not in env_cls.quirks]
-    if unknown:
-        raise UsageError(f"--env-quirks {unknown[0]}: {env_cls.name} has "
-                         f"{', '.join(f'{k} ({v})' for k, v in env_cls.quirks.items()) or 'no quirks'}")
+    try:
+        env_cls.check_quirks(config.env_quirks)
+    except ValueError as err:
+        raise UsageError(f"--env-quirks: {err}") from None
     if config.test_protocol not in env_cls.test_protocols:
         raise UsageError(f"--test-protocol {config.test_protocol!r}: {env_cls.name} has "
                          f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}")

@@ -18,6 +18,7 @@ from pathlib import Path
 from envs_jax import env_class
 from jaxbridge.core import grid as hyper_grid
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.devices import default_workers, split_devices
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint, comparison, rundir
@@ -108,10 +109,10 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
     def run(program: list[str]) -> list[dict]:
         if stop.is_set():  # interrupted before this program's turn
             raise Interrupted(0)
+        if get_approach(named[program[0]].approach).low_level:  # brax: seed after seed, one checkpoint
+            return [train_low_level_run(make_setup(named[n], env_cls), experiment_dir / n) for n in program]
         run_dirs = [experiment_dir / name for name in program]
         setup = make_setup(named[program[0]], env_cls)
-        if setup.approach.low_level:  # brax's trainers: seed after seed, one checkpoint at the end
-            return [train_low_level_run(make_setup(named[n], env_cls), experiment_dir / n) for n in program]
         started = all(checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
         if not started and primary:
             for run_dir in run_dirs:
