@@ -185,3 +185,18 @@ def test_train_runs_ours_and_low_level_baselines_into_one_table_eval_and_resume(
     ours = next(line for line in out.splitlines() if line.startswith("| ours | 0-1 |"))
     steps = sum(int(r["train_env_steps"]) for r in metrics("ours"))
     assert ours.split(" | ")[2] == f"{steps / 2:,.0f}"
+
+
+@pytest.mark.parametrize("maps_held, cleared", [(10, False), (60, True), (None, True)])
+def test_jax_caches_are_cleared_only_when_the_process_runs_short_of_memory_maps(tmp_path, maps_held, cleared):
+    """Between low-level seeds: clearing makes every other approach's program trace again, so it waits
+    until the process holds half the kernel's maps (or cannot count them)."""
+    from jaxbridge.utils import compile_cache
+    maps, limit = tmp_path / "maps", tmp_path / "max_map_count"
+    limit.write_text("100\n")
+    if maps_held is not None:
+        maps.write_text("mapping\n" * maps_held)
+    program = jax.jit(lambda x: x + 1)
+    program(jnp.ones(3))
+    assert compile_cache.clear_if_maps_run_short(0.5, str(maps), str(limit)) == cleared
+    assert program._cache_size() == (0 if cleared else 1)

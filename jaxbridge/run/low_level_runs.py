@@ -19,6 +19,7 @@ from jaxbridge.learn.online import CycleMetrics
 from jaxbridge.learn.setup import Setup
 from jaxbridge.run import artifacts, checkpoint
 from jaxbridge.run.runner import Interrupted, checkpoint_record
+from jaxbridge.utils import compile_cache
 from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.files import write_atomic
 from jaxbridge.utils.progress import cycle_progress
@@ -103,8 +104,8 @@ def train_low_level(setup: Setup, run_dir: Path, progress: bool = True, bar=None
             policies.append(params)
             # brax's trainers compile closures anew per call and jax's caches keep every executable
             # (2,336 memory maps per seed here): past ~28 seeds a process meets the kernel's 65,530 maps
-            # and LLVM aborts. Other approaches' programs are traced again (compiled from the cache).
-            jax.clear_caches()
+            # and LLVM aborts. Cleared only then: it makes every other approach's program trace again.
+            compile_cache.clear_if_maps_run_short()
     finally:
         if own_bar:
             bar.close()

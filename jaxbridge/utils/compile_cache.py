@@ -57,6 +57,24 @@ def enable(on: bool = True, path: Path | None = None) -> str | None:
     return str(directory)
 
 
+def clear_if_maps_run_short(fraction: float = 0.5, maps: str = "/proc/self/maps",
+                            limit: str = "/proc/sys/vm/max_map_count") -> bool:
+    """`jax.clear_caches()` once this process holds more than `fraction` of the kernel's memory maps
+    (every compiled executable holds some, and LLVM aborts when none are left), or always where they
+    cannot be counted (not Linux). Clearing makes every program trace again, so it waits until it must.
+    True if it cleared."""
+    try:
+        with open(maps, "rb") as lines:
+            used = sum(1 for _ in lines)
+        room = int(Path(limit).read_text())
+    except (OSError, ValueError):
+        used, room = 1, 0
+    if used <= fraction * room:
+        return False
+    jax.clear_caches()
+    return True
+
+
 HELP = ("do not use the persistent compilation cache (default: on, in $JAXBRIDGE_CACHE_DIR, else "
         "$XDG_CACHE_HOME/jaxbridge/jax or ~/.cache/jaxbridge/jax; a later run of the same shapes loads its "
         "programs instead of compiling them, the training cycle included)")
