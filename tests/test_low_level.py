@@ -1,6 +1,7 @@
 """The low-level baselines (issue 22): the brax view of an env from its stuck state, the meta-policy with a
 low-level bridge, and train.py running them beside ours."""
 import csv
+import os
 from dataclasses import dataclass
 
 import chex
@@ -18,6 +19,7 @@ from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import evaluation_batch, make_batch
 from jaxbridge.learn.brax_env import BridgeEnv, low_level_controls, scaled_choice
 from jaxbridge.learn.low_level import PolicyBridge, _networks
+from jaxbridge.utils.compile_cache import CacheJanitor
 
 from brax.envs.wrappers.training import wrap  # noqa: E402 -- after brax_env, which imports brax quietly
 from brax.training.acme import running_statistics, specs
@@ -187,16 +189,28 @@ def test_train_runs_ours_and_low_level_baselines_into_one_table_eval_and_resume(
     assert ours.split(" | ")[2] == f"{steps / 2:,.0f}"
 
 
-@pytest.mark.parametrize("maps_held, cleared", [(10, False), (60, True), (None, True)])
-def test_jax_caches_are_cleared_only_when_the_process_runs_short_of_memory_maps(tmp_path, maps_held, cleared):
+
+def fake_process(root, maps: int, resident_pages: int):
+    """A /proc/self of `maps` mappings and `resident_pages` resident pages, under `root`."""
+    root.mkdir(exist_ok=True)
+    (root / "maps").write_text("mapping\n" * maps)
+    (root / "statm").write_text(f"999 {resident_pages} 0 0 0 0 0\n")
+
+
+@pytest.mark.parametrize("maps, grown_pages, cleared", [(10, 5, False), (60, 5, True), (10, 50, True), (None, 0, True)])
+def test_the_cache_janitor_clears_only_when_maps_or_memory_run_short(tmp_path, maps, grown_pages, cleared):
     """Between low-level seeds: clearing makes every other approach's program trace again, so it waits
-    until the process holds half the kernel's maps (or cannot count them)."""
-    from jaxbridge.utils import compile_cache
-    maps, limit = tmp_path / "maps", tmp_path / "max_map_count"
+    until the process holds half the kernel's maps or has grown past its allowance (or cannot tell)."""
+    page = os.sysconf("SC_PAGE_SIZE")
+    proc, limit = tmp_path / "self", tmp_path / "max_map_count"
     limit.write_text("100\n")
-    if maps_held is not None:
-        maps.write_text("mapping\n" * maps_held)
+    fake_process(proc, 10, 100)
+    janitor = CacheJanitor(max_growth=20 * page, proc=proc, map_limit=limit)
+    if maps is None:
+        (proc / "maps").unlink()
+    else:
+        fake_process(proc, maps, 100 + grown_pages)
     program = jax.jit(lambda x: x + 1)
     program(jnp.ones(3))
-    assert compile_cache.clear_if_maps_run_short(0.5, str(maps), str(limit)) == cleared
+    assert janitor() == cleared
     assert program._cache_size() == (0 if cleared else 1)

@@ -88,6 +88,7 @@ def train_low_level(setup: Setup, run_dir: Path, progress: bool = True, bar=None
         bar = cycle_progress(config.cycles, f"{config.env} {config.approach} x{config.num_seeds} seeds",
                              progress and primary)
     per_seed, policies, evaluations = [], [], 0
+    janitor = compile_cache.CacheJanitor()
 
     def evaluated() -> None:  # the bar counts cycles of all seeds: one per num_seeds evaluations
         nonlocal evaluations
@@ -103,9 +104,9 @@ def train_low_level(setup: Setup, run_dir: Path, progress: bool = True, bar=None
             per_seed.append(rows)
             policies.append(params)
             # brax's trainers compile closures anew per call and jax's caches keep every executable
-            # (2,336 memory maps per seed here): past ~28 seeds a process meets the kernel's 65,530 maps
-            # and LLVM aborts. Cleared only then: it makes every other approach's program trace again.
-            compile_cache.clear_if_maps_run_short()
+            # (2,336 memory maps and ~150 MB per seed here): past ~28 seeds a process meets the kernel's
+            # 65,530 maps and LLVM aborts.
+            janitor()
     finally:
         if own_bar:
             bar.close()

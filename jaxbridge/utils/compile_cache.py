@@ -57,22 +57,38 @@ def enable(on: bool = True, path: Path | None = None) -> str | None:
     return str(directory)
 
 
-def clear_if_maps_run_short(fraction: float = 0.5, maps: str = "/proc/self/maps",
-                            limit: str = "/proc/sys/vm/max_map_count") -> bool:
-    """`jax.clear_caches()` once this process holds more than `fraction` of the kernel's memory maps
-    (every compiled executable holds some, and LLVM aborts when none are left), or always where they
-    cannot be counted (not Linux). Clearing makes every program trace again, so it waits until it must.
-    True if it cleared."""
-    try:
-        with open(maps, "rb") as lines:
-            used = sum(1 for _ in lines)
-        room = int(Path(limit).read_text())
-    except (OSError, ValueError):
-        used, room = 1, 0
-    if used <= fraction * room:
-        return False
-    jax.clear_caches()
-    return True
+class CacheJanitor:
+    """Clears jax's caches between pieces of work that compile programs nobody calls again (brax's
+    trainers, anew for every seed), once this process holds half the kernel's memory maps (every
+    executable holds some; LLVM aborts when none are left) or has grown by `max_growth` bytes since the
+    last clear; always where neither can be read (not Linux). Clearing waits until then because it makes
+    every program trace again, and those with host callbacks compile again."""
+
+    def __init__(self, max_growth: int = 1 << 30, proc: Path = Path("/proc/self"),
+                 map_limit: Path = Path("/proc/sys/vm/max_map_count")):
+        self.max_growth, self.proc, self.map_limit = max_growth, Path(proc), Path(map_limit)
+        self.since = self._use()
+
+    def _use(self) -> tuple[int, int, int] | None:
+        """(memory maps held, the kernel's limit on them, resident bytes), or None."""
+        try:
+            with open(self.proc / "maps", "rb") as lines:
+                maps = sum(1 for _ in lines)
+            resident = int((self.proc / "statm").read_text().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+            return maps, int(self.map_limit.read_text()), resident
+        except (OSError, ValueError, IndexError):
+            return None
+
+    def __call__(self) -> bool:
+        """Clear if it is time; True if it cleared."""
+        use = self._use()
+        if use is not None and self.since is not None:
+            maps, limit, resident = use
+            if 2 * maps <= limit and resident - self.since[2] <= self.max_growth:
+                return False
+        jax.clear_caches()
+        self.since = self._use()
+        return True
 
 
 HELP = ("do not use the persistent compilation cache (default: on, in $JAXBRIDGE_CACHE_DIR, else "
