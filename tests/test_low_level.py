@@ -189,7 +189,6 @@ def test_train_runs_ours_and_low_level_baselines_into_one_table_eval_and_resume(
     assert ours.split(" | ")[2] == f"{steps / 2:,.0f}"
 
 
-
 def fake_process(root, maps: int, resident_pages: int):
     """A /proc/self of `maps` mappings and `resident_pages` resident pages, under `root`."""
     root.mkdir(exist_ok=True)

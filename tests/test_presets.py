@@ -103,7 +103,7 @@ def test_flags_override_the_preset_and_bad_names_are_refused():
         preset_values("theirs", env_class("coffee"))
     assert make_config({"env": "coffee", "preset": "authors", "env_quirks": ()})[0].env_quirks == ()  # --env-quirks none
     assert make_config({"env": "doorknobs", "env_quirks": ("raw_offsets",)})[0].env_quirks == ("raw_offsets",)
-    with pytest.raises(UsageError, match="has no quirk .shared_repeat_flag. \(its quirks: raw_offsets"):
+    with pytest.raises(UsageError, match=r"has no quirk .shared_repeat_flag. \(its quirks: raw_offsets"):
         make_config({"env": "doorknobs", "env_quirks": ("shared_repeat_flag",)})
 
 

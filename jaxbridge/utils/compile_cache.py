@@ -67,7 +67,7 @@ class CacheJanitor:
     def __init__(self, max_growth: int = 1 << 30, proc: Path = Path("/proc/self"),
                  map_limit: Path = Path("/proc/sys/vm/max_map_count")):
         self.max_growth, self.proc, self.map_limit = max_growth, Path(proc), Path(map_limit)
-        self.since = self._use()
+        self.resident_since = self._resident()
 
     def _use(self) -> tuple[int, int, int] | None:
         """(memory maps held, the kernel's limit on them, resident bytes), or None."""
@@ -79,15 +79,19 @@ class CacheJanitor:
         except (OSError, ValueError, IndexError):
             return None
 
+    def _resident(self) -> int | None:
+        use = self._use()
+        return None if use is None else use[2]
+
     def __call__(self) -> bool:
         """Clear if it is time; True if it cleared."""
         use = self._use()
-        if use is not None and self.since is not None:
+        if use is not None and self.resident_since is not None:
             maps, limit, resident = use
-            if 2 * maps <= limit and resident - self.since[2] <= self.max_growth:
+            if 2 * maps <= limit and resident - self.resident_since <= self.max_growth:
                 return False
         jax.clear_caches()
-        self.since = self._use()
+        self.resident_since = self._resident()
         return True
 
 
