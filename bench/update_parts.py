@@ -8,7 +8,9 @@ The full-state ablations are measured twice, with their task-constant entries sp
 `split_task_state`) and whole. Parts (each jitted alone, over --updates iterations, after a compiling call): the minibatch draws
 (`minibatch_indices`, all updates at once), gathering and encoding a minibatch, the forward and backward
 pass on a fixed minibatch, clip + Adam, the polyak step; and the per-cycle relabelling of the buffer
-(whole, in ms). The parts do not add up to the whole exactly: XLA fuses across them in `learn`.
+(whole, in ms). `dense_fb_us`: the forward and backward pass of a network whose first layer takes only
+the minibatch's stored entries and the action (a plain dense layer, no task-constant rows): what the
+split's pass would cost if the constant rows' gathers and scatters were free. The parts do not add up to the whole exactly: XLA fuses across them in `learn`.
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from jaxbridge.learn import dqn
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.learn.approaches import get_approach
-from jaxbridge.learn.q_bridge import at_task, batch_input
+from jaxbridge.learn.q_bridge import SplitInput, at_task, batch_input
 
 
 def _seconds(fn, arg) -> float:
@@ -62,6 +64,14 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
         grads = jax.grad(lambda p: jnp.mean((net.apply(p, inputs, members=True) - 1.0) ** 2))(params)
         return jax.tree.map(lambda p, g: p - 1e-3 * g, params, grads)
 
+    # The stored entries ++ the action as one plain input (ours' input is one already).
+    dense = jnp.concatenate([inputs.observation, inputs.action], -1) if isinstance(inputs, SplitInput) else inputs
+    dense_params = {"params": net.init(jax.random.key(0), dense[:1])["params"]}
+
+    def dense_forward_backward(params):
+        grads = jax.grad(lambda p: jnp.mean((net.apply(p, dense, members=True) - 1.0) ** 2))(params)
+        return jax.tree.map(lambda p, g: p - 1e-3 * g, params, grads)
+
     def adam(state):
         params, opt_state = state
         step, opt_state = optimizer.update(params, opt_state, params)
@@ -75,6 +85,7 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
         "draws_us": per_update(_seconds(lambda l: dqn.minibatch_indices(config, l), learner)),
         "gather_encode_us": per_update(_seconds(gather_encode, jnp.float32(0))),
         "forward_backward_us": per_update(_seconds(repeat(forward_backward), learner.params)),
+        "dense_fb_us": per_update(_seconds(repeat(dense_forward_backward), dense_params)),
         "adam_us": per_update(_seconds(repeat(adam), (learner.params, learner.opt_state))),
         "polyak_us": per_update(_seconds(repeat(lambda t: optax.incremental_update(learner.params, t, 0.0025)),
                                          learner.target_params)),
@@ -91,8 +102,8 @@ def main() -> None:
     args = parser.parse_args()
     print(f"jax {jax.__version__}, one {jax.devices()[0].platform} device, {args.env}, buffer filled to {args.fill}, "
           f"us per update")
-    columns = ["input", "learn_us", "relabel_ms", "draws_us", "gather_encode_us", "forward_backward_us", "adam_us",
-               "polyak_us"]
+    columns = ["input", "learn_us", "relabel_ms", "draws_us", "gather_encode_us", "forward_backward_us",
+               "dense_fb_us", "adam_us", "polyak_us"]
     print("| approach | " + " | ".join(columns) + " |")
     print("|---" * (len(columns) + 1) + "|")
     for approach in args.approaches.split(","):
