@@ -10,7 +10,8 @@ The full-state ablations are measured twice, with their task-constant entries sp
 pass on a fixed minibatch, clip + Adam, the polyak step; and the per-cycle relabelling of the buffer
 (whole, in ms). `dense_fb_us`: the forward and backward pass of a network whose first layer takes only
 the minibatch's stored entries and the action (a plain dense layer, no task-constant rows): what the
-split's pass would cost if the constant rows' gathers and scatters were free. The parts do not add up to the whole exactly: XLA fuses across them in `learn`.
+split's pass would cost if the constant rows' gathers and scatters were free. The parts do not add up
+to the whole exactly: XLA fuses across them in `learn`.
 """
 from __future__ import annotations
 
@@ -60,17 +61,15 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
             return total + sum(x.sum() for x in jax.tree.leaves(encoded)), None
         return jax.lax.scan(one, total, indices)[0]
 
-    def forward_backward(params):
-        grads = jax.grad(lambda p: jnp.mean((net.apply(p, inputs, members=True) - 1.0) ** 2))(params)
-        return jax.tree.map(lambda p, g: p - 1e-3 * g, params, grads)
+    def forward_backward(x):  # a step on a fixed minibatch input x, as a function of the parameters
+        def step(params):
+            grads = jax.grad(lambda p: jnp.mean((net.apply(p, x, members=True) - 1.0) ** 2))(params)
+            return jax.tree.map(lambda p, g: p - 1e-3 * g, params, grads)
+        return step
 
     # The stored entries ++ the action as one plain input (ours' input is one already).
     dense = jnp.concatenate([inputs.observation, inputs.action], -1) if isinstance(inputs, SplitInput) else inputs
     dense_params = {"params": net.init(jax.random.key(0), dense[:1])["params"]}
-
-    def dense_forward_backward(params):
-        grads = jax.grad(lambda p: jnp.mean((net.apply(p, dense, members=True) - 1.0) ** 2))(params)
-        return jax.tree.map(lambda p, g: p - 1e-3 * g, params, grads)
 
     def adam(state):
         params, opt_state = state
@@ -84,8 +83,8 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
         "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(learning, l, l.key, task), learner),
         "draws_us": per_update(_seconds(lambda l: dqn.minibatch_indices(config, l), learner)),
         "gather_encode_us": per_update(_seconds(gather_encode, jnp.float32(0))),
-        "forward_backward_us": per_update(_seconds(repeat(forward_backward), learner.params)),
-        "dense_fb_us": per_update(_seconds(repeat(dense_forward_backward), dense_params)),
+        "forward_backward_us": per_update(_seconds(repeat(forward_backward(inputs)), learner.params)),
+        "dense_fb_us": per_update(_seconds(repeat(forward_backward(dense)), dense_params)),
         "adam_us": per_update(_seconds(repeat(adam), (learner.params, learner.opt_state))),
         "polyak_us": per_update(_seconds(repeat(lambda t: optax.incremental_update(learner.params, t, 0.0025)),
                                          learner.target_params)),
