@@ -111,6 +111,31 @@ def test_an_ensemble_is_the_minimum_of_independent_members_all_fitted_to_the_tar
     assert np.array_equal(np.asarray(value), np.asarray(members).min(0))
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_feature_noise_fits_the_neighbourhood_of_a_stored_state_not_only_the_point(seed):
+    """Every stored transition has the same features f0 and target 1 (skill 0) or 0 (skill 1). Fitted
+    without noise, Q is exact at f0 and drifts around it; fitted with feature noise (a fresh draw per
+    update), it holds the value around f0 too."""
+    n = 64
+    f0 = jax.random.uniform(jax.random.key(10 + seed), (ENV.num_features,))
+    f = jnp.broadcast_to(f0, (n, ENV.num_features))
+    skill = jnp.arange(n) % 2
+    batch = Transition(features=f, skill=skill, param=jnp.zeros(n), reward=(skill == 0).astype(jnp.float32),
+                       done=jnp.ones(n, bool), next_features=f, next_num_ground=jnp.ones((n, ENV.num_skills + 1), jnp.int32))
+    nearby = f0 + 0.2 * jax.random.normal(jax.random.key(99), (256, ENV.num_features))
+    error = {}
+    for noise in (0.0, 0.2):
+        cfg = TrainConfig(updates_per_cycle=300, buffer_capacity=n, batch_size=n, feature_noise=noise)
+        learning = make_dqn(cfg, ENV, ENV.num_features)
+        learner = init_learner(learning, jax.random.key(seed))
+        learner = learner.replace(buffer=add(learner.buffer, for_buffer(batch), jnp.ones(n, bool)))
+        learner, _, _ = jax.jit(lambda l: learn(learning, l, jnp.int32(n)))(learner)
+        assert float(learning.net.apply(learner.online, encode(ENV, f0, jnp.int32(0), jnp.float32(0)))) == pytest.approx(1.0, abs=0.05)
+        q = learning.net.apply(learner.online, encode(ENV, nearby, jnp.int32(0), jnp.float32(0)))
+        error[noise] = float(jnp.abs(q - 1.0).mean())
+    assert error[0.2] < 0.5 * error[0.0], error
+
+
 @pytest.mark.parametrize("ensemble", [1, 2])
 def test_a_wide_observation_is_split_off_the_candidates_without_changing_q_or_the_choice(ensemble):
     """Full-state observations (>= SPLIT_FROM_FEATURES values) go in as a SplitInput: the same parameters,

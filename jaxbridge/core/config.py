@@ -10,8 +10,9 @@ from dataclasses import dataclass
 # `target_init`, `reset_optimizer`, `explore_ground_operators` (older runs were the jaxbridge preset,
 # which their defaults are); 5: `output_init` (older runs started their output layer at zero); 6:
 # `env_quirks`, `normalise`, `fit_patience`, `param_samples` (older runs had none of them: their defaults);
-# 7: `loop_guard` (older runs had none); 8: `low_level_budget` (older runs had no low-level baselines)
-CONFIG_VERSION = 8
+# 7: `loop_guard` (older runs had none); 8: `low_level_budget` (older runs had no low-level baselines);
+# 9: `feature_noise` (older runs had none)
+CONFIG_VERSION = 9
 
 
 # The numeric hyperparameters that change no shape or program: pytree leaves of the cycle
@@ -27,7 +28,7 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
           "epsilon_end": (0, 1, True), "epsilon_decay": (0, None, True), "num_seeds": (1, None, True),
           "cycles": (1, None, True), "episodes_per_cycle": (1, None, True), "train_steps": (1, None, True),
           "num_test_tasks": (1, None, True), "updates_per_cycle": (0, None, True), "fit_patience": (0, None, True),
-          "batch_size": (1, None, True), "low_level_budget": (1, None, True),
+          "batch_size": (1, None, True), "low_level_budget": (1, None, True), "feature_noise": (0, None, True),
           "q_ensemble": (1, None, True), "n_sample": (1, None, True), "n_target_sample": (1, None, True),
           "buffer_capacity": (1, None, True), "checkpoint_every": (1, None, True), "seed_block": (1, None, True),
           "first_seed": (0, None, True)}
@@ -137,6 +138,11 @@ class TrainConfig:
     """Clip the bootstrapped next-state value of every TD target to [0, 1 + call_planner_bonus], the range
     every true Q lies in (rewards are 0, or that much at the goal). Stops the max over sampled parameters
     from feeding its upward noise back into the targets (off in the paper)."""
+    feature_noise: float = 0.0
+    """Standard deviation of Gaussian noise added to the state features of each minibatch's transitions
+    (a fresh draw per update; the TD targets stay those of the clean features): the Q-network is fitted
+    to a neighbourhood of every stored state, not to the point, so it varies less with features that
+    differ between the training task and the test tasks. 0: none (the paper)."""
     loop_guard: bool = True
     """At a bridge decision, every skill the bridge already chose at decisions in this same low-level
     state (each of which left it unchanged) is not applicable, whatever its grounding or parameter: a
@@ -182,7 +188,7 @@ class TrainConfig:
             data.setdefault("approach", "ours")
         if version in (1, 2):
             data.setdefault("split_task_state", False)
-        elif version not in (3, 4, 5, 6, 7, CONFIG_VERSION):
+        elif version not in (3, 4, 5, 6, 7, 8, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         if version < 7:  # runs before version 7 had no loop guard
             data.setdefault("loop_guard", False)

@@ -23,6 +23,7 @@ AUTHORS = {
     "clip_bootstrap": False,  # no clipping of the bootstrapped value
     "q_ensemble": 1,  # one network
     "loop_guard": False,  # a skill may be chosen again in the state it left unchanged
+    "feature_noise": 0.0,  # each minibatch fits the stored features exactly
     "activation": "relu",  # plain ReLU hidden units
     "output_init": "uniform",  # PyTorch's default init of the output layer too
     "target_init": "apart",  # the target initialised apart from the online network

@@ -212,10 +212,14 @@ def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array
     env, config, net = dqn.env, dqn.config, dqn.net
     hyper = dqn.hyper if hyper is None else hyper
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
+    features = batch.features
+    if config.feature_noise > 0:  # a fresh draw per update: the update count tells the updates of a cycle apart
+        noise = jax.random.normal(jax.random.fold_in(learner.key, learner.updates), features.shape, features.dtype)
+        features = features + config.feature_noise * noise
 
     def loss_fn(params):
         variables = learner.replace(params=params).online
-        q = net.apply(variables, batch_input(env, batch.features, batch.skill, batch.param, at_task(task, batch.task)),
+        q = net.apply(variables, batch_input(env, features, batch.skill, batch.param, at_task(task, batch.task)),
                       members=True)
         error = q - targets[index]
         if learner.norm is not None:  # the authors' loss is on the scaled targets
