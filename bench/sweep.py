@@ -7,12 +7,11 @@ docs/RESULTS.md.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import time
 
 import numpy as np
 
-from bench.training import measure_cycles
+from bench.training import measure_cycles, with_overrides
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import select_devices
 from jaxbridge.learn.setup import Setup
@@ -35,12 +34,7 @@ def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cy
 def swept_config(args) -> tuple[TrainConfig, dict]:
     """The env's config for the chosen seeds and cycles with the overrides applied, and the overrides."""
     config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
-    changes = {}
-    for item in args.overrides:
-        name, value = item.split("=", 1)
-        kind = type(getattr(config, name))
-        changes[name] = value == "True" if kind is bool else kind(value)
-    return dataclasses.replace(config, **changes), changes
+    return with_overrides(config, args.overrides)
 
 
 def train_seeds(config: TrainConfig) -> tuple[Setup, object, np.ndarray]:

@@ -10,6 +10,7 @@ Switch Door 17,572 s, Doorknobs 21,118 s; Coffee never finished, ~13,900 s of le
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 
 import jax
@@ -57,6 +58,16 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
             "total_s": time.perf_counter() - start, "setup": setup, "seeds": seeds, "learners": learners, "cycle": cycle}
 
 
+def with_overrides(config: TrainConfig, items: list[str]) -> tuple[TrainConfig, dict]:
+    """`config` with TrainConfig fields given as name=value (booleans: True/False), and those changes."""
+    changes = {}
+    for item in items:
+        name, value = item.split("=", 1)
+        kind = type(getattr(config, name))
+        changes[name] = value == "True" if kind is bool else kind(value)
+    return dataclasses.replace(config, **changes), changes
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
@@ -65,10 +76,11 @@ def main() -> None:
     parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
     parser.add_argument("--approach", default="ours", help="which approach (default: %(default)s)")
+    parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value, e.g. feature_noise=0")
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
-    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles, seed_block=args.seed_block,
-                                 approach=args.approach)
+    config, _ = with_overrides(TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles,
+                                                   seed_block=args.seed_block, approach=args.approach), args.overrides)
     run = measure_cycles(config, seeds_over)
     times, total = run["times"], run["total_s"]
     steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
