@@ -58,12 +58,11 @@ def main() -> None:
     for s, seed in enumerate(config.seeds):
         q_params = jax.tree.map(lambda x, s=s: x[s], learners.online)
         turn, open_best = map(np.asarray, probe(env, net, q_params, features))
-        misses = np.abs(turn - KNOB_TARGET) >= OPEN_TOLERANCE
-        wrong.append(misses.mean())
+        wrong.append(np.mean(np.abs(turn - KNOB_TARGET) >= OPEN_TOLERANCE))
         not_open.append(1 - open_best.mean())
-        print(f"seed {seed:>3}: wrong turn at {misses.mean():.2f} of {len(turn)} offsets "
+        print(f"seed {seed:>3}: wrong turn at {wrong[-1]:.2f} of {len(turn)} offsets "
               f"(turns {np.quantile(turn, [0, 0.5, 1]).round(2).tolist()} min/median/max), "
-              f"OpenDoor not best at {1 - open_best.mean():.2f}")
+              f"OpenDoor not best at {not_open[-1]:.2f}")
     print(f"overrides {changes or 'none'}: wrong turn at {np.mean(wrong):.3f} of offsets on average, "
           f"seeds with any wrong turn {int(np.sum(np.asarray(wrong) > 0))}/{len(wrong)}; "
           f"OpenDoor not best at {np.mean(not_open):.3f}")

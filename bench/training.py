@@ -17,6 +17,7 @@ import jax
 import numpy as np
 
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.grid import parse_value
 from jaxbridge.learn.devices import SeedMesh, describe, device_count_arg, select_devices
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
@@ -59,12 +60,8 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
 
 
 def with_overrides(config: TrainConfig, items: list[str]) -> tuple[TrainConfig, dict]:
-    """`config` with TrainConfig fields given as name=value (booleans: True/False), and those changes."""
-    changes = {}
-    for item in items:
-        name, value = item.split("=", 1)
-        kind = type(getattr(config, name))
-        changes[name] = value == "True" if kind is bool else kind(value)
+    """`config` with TrainConfig fields given as name=value (as train.py --sweep reads them), and those changes."""
+    changes = {name: parse_value(name, value) for name, value in (item.split("=", 1) for item in items)}
     return dataclasses.replace(config, **changes), changes
 
 

@@ -20,7 +20,9 @@ FIELDS = {f.name: f for f in dataclasses.fields(TrainConfig)}
 SWEEPABLE = tuple(name for name in FIELDS if name not in NOT_SWEPT)
 
 
-def _parse_value(key: str, text: str):
+def parse_value(key: str, text: str):
+    """`text` as a value of TrainConfig field `key` (booleans: true/false/1/0; hidden_sizes: 64x64);
+    ValueError (one line) if it is not one."""
     kind = typing.get_type_hints(TrainConfig)[key]
     try:
         if kind is bool:
@@ -37,7 +39,7 @@ def _parse_value(key: str, text: str):
     except ValueError:
         expected = {"hidden_sizes": "widths like 64x64", bool: "true or false", int: "an integer",
                     float: "a number"}.get(key if key == "hidden_sizes" else kind, "a value")
-        raise ValueError(f"--sweep {key}: expected {expected}, got {text!r}") from None
+        raise ValueError(f"{key}: expected {expected}, got {text!r}") from None
 
 
 def parse_sweeps(texts: list[str]) -> dict[str, tuple]:
@@ -55,7 +57,10 @@ def parse_sweeps(texts: list[str]) -> dict[str, tuple]:
             raise ValueError(f"--sweep {key}: sets the experiment, not a setting; sweepable: {', '.join(SWEEPABLE)}")
         if key in grid:
             raise ValueError(f"--sweep {key} is given twice; list all its values in one --sweep")
-        parsed = tuple(_parse_value(key, v.strip()) for v in values.split(","))
+        try:
+            parsed = tuple(parse_value(key, v.strip()) for v in values.split(","))
+        except ValueError as err:
+            raise ValueError(f"--sweep {err}") from None
         if len(set(parsed)) < len(parsed):
             raise ValueError(f"--sweep {key}: a value is repeated in {values}")
         for value in parsed:
