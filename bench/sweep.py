@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from bench.training import measure_cycles, with_overrides
+from bench.training import config_override, measure_cycles, with_overrides
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import select_devices
 from jaxbridge.learn.setup import Setup
@@ -27,7 +27,8 @@ def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cy
     parser.add_argument("--num-seeds", type=int, default=num_seeds, help="seeds (default: %(default)s)")
     parser.add_argument("--first-seed", type=int, default=first_seed, help="first seed (default: %(default)s)")
     parser.add_argument("--cycles", type=int, default=cycles, help="cycles (default: %(default)s)")
-    parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value (booleans: True/False)")
+    parser.add_argument("overrides", nargs="*", type=config_override,
+                        help="TrainConfig fields as name=value (booleans: true/false)")
     return parser
 
 

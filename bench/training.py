@@ -17,7 +17,7 @@ import jax
 import numpy as np
 
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.grid import parse_value
+from jaxbridge.core.grid import FIELDS, parse_value
 from jaxbridge.learn.devices import SeedMesh, describe, device_count_arg, select_devices
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
@@ -59,9 +59,20 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
             "total_s": time.perf_counter() - start, "setup": setup, "seeds": seeds, "learners": learners, "cycle": cycle}
 
 
-def with_overrides(config: TrainConfig, items: list[str]) -> tuple[TrainConfig, dict]:
-    """`config` with TrainConfig fields given as name=value (as train.py --sweep reads them), and those changes."""
-    changes = {name: parse_value(name, value) for name, value in (item.split("=", 1) for item in items)}
+def config_override(text: str) -> tuple[str, object]:
+    """argparse type of a `name=value` TrainConfig override, its value read as train.py --sweep reads it."""
+    name, sep, value = text.partition("=")
+    if not sep or name not in FIELDS:
+        raise argparse.ArgumentTypeError(f"expected a TrainConfig field as name=value, got {text!r}")
+    try:
+        return name, parse_value(name, value)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
+def with_overrides(config: TrainConfig, overrides: list[tuple[str, object]]) -> tuple[TrainConfig, dict]:
+    """`config` with the (field, value) overrides applied, and those changes."""
+    changes = dict(overrides)
     return dataclasses.replace(config, **changes), changes
 
 
@@ -73,7 +84,8 @@ def main() -> None:
     parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
     parser.add_argument("--approach", default="ours", help="which approach (default: %(default)s)")
-    parser.add_argument("overrides", nargs="*", help="TrainConfig fields as name=value, e.g. feature_noise=0")
+    parser.add_argument("overrides", nargs="*", type=config_override,
+                        help="TrainConfig fields as name=value, e.g. feature_noise=0")
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
     config, _ = with_overrides(TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles,

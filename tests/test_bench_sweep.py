@@ -1,7 +1,9 @@
-"""bench.sweep's reliability line: the figures the tuning records in docs/RESULTS.md quote."""
+"""bench.sweep's reliability line (the figures the tuning records in docs/RESULTS.md quote) and its
+config overrides."""
 import numpy as np
+import pytest
 
-from bench.sweep import reliability
+from bench.sweep import reliability, swept_config, sweep_parser
 
 
 def test_the_sweeps_reliability_figures_count_late_dips_and_low_means():
@@ -16,3 +18,18 @@ def test_the_sweeps_reliability_figures_count_late_dips_and_low_means():
     assert "mean stays >= 0.93 from cycle 57" in line  # cycles 55-56 are the last below 0.93
     assert "mean stays >= 0.95 from cycle 1" in reliability(np.ones((2, 50)), 0.95)
     assert reliability(rates[:, :49], 0.95) == "reliability: needs 50 cycles or more"
+
+
+def test_bench_overrides_are_read_as_train_py_sweep_reads_them_and_bad_ones_are_argparse_errors(capsys):
+    parser = sweep_parser("probe", "doorknobs", 1, 0, 1)
+    args = parser.parse_args(["feature_noise=0", "loop_guard=false", "hidden_sizes=64x16"])
+    config, changes = swept_config(args)
+    assert changes == {"feature_noise": 0.0, "loop_guard": False, "hidden_sizes": (64, 16)}
+    assert (config.feature_noise, config.loop_guard, config.hidden_sizes) == (0.0, False, (64, 16))
+    for bad, message in (("feature_noise=abc", "feature_noise: expected a number, got 'abc'"),
+                         ("no_such_field=1", "expected a TrainConfig field as name=value, got 'no_such_field=1'"),
+                         ("feature_noise", "expected a TrainConfig field as name=value, got 'feature_noise'")):
+        with pytest.raises(SystemExit) as exit_:
+            parser.parse_args([bad])
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and message in err and "Traceback" not in err
