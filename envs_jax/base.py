@@ -127,7 +127,8 @@ class NoveltyEnv(abc.ABC):
     train_defaults: ClassVar[dict] = {}
     # How `eval.py RUN --sweep novelties` grows this env's tasks (None: no sweep).
     novelty_sweep: ClassVar[NoveltySweep | None] = None
-    # The approaches train.py runs when none are named (None: all six), and why not all.
+    # The approaches train.py runs when none are named: the paper's figure for this env (None: all six),
+    # and why the others are left out of it.
     default_approaches: ClassVar[tuple[str, ...] | None] = None
     why_not_all: ClassVar[str] = ""
     # The sizes `sized_task` takes (name -> what it counts), e.g. {"cells": ..., "doors": ...}.

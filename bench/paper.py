@@ -1,0 +1,178 @@
+"""One env's headline on the test seeds, regenerated from nothing and written as committed records.
+
+    python -m bench.paper --env light_switch_door      # -> docs/results/light_switch_door/
+    python -m bench.paper --env doorknobs --runs /tmp/paper
+
+Each step runs as a user would run it (the same commands, in child processes; wall time and peak memory
+of each are recorded):
+  1. train.py --env E on the test seeds: the approaches of the paper's figure for E (train.py's default);
+  2. train.py --env E --approaches ours --preset authors on the same seeds;
+  3. the oracle bridge on the same test tasks, under each of those runs' test protocols: the ceiling;
+  4. eval.py RUN --sweep novelties: every approach's final bridges on more and more novelties.
+It then writes docs/results/E/: results.csv (every run's statistics at every cycle), oracle.csv (the
+ceiling per seed), sweep.csv, figure.png, sweep.png and run.json (commit, commands, wall times, peak
+memory, machine). `python -m bench.render` turns the records into the tables of docs/RESULTS.md.
+
+A step that has finished is not run again (steps.json in the runs directory says which have), so a
+stopped command continues where it left off; training resumes from its checkpoints.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from bench.records import RECORDS, TEST_SEEDS, git_commit
+from jaxbridge.run.comparison import run_labels, write_comparison
+
+ROOT = Path(__file__).resolve().parents[1]
+ENVS = ("light_switch_door", "doorknobs", "coffee")
+PRESET_RUN = "ours_authors_preset"  # the record's name for ours with --preset authors
+
+
+def shown(path: Path) -> str:
+    """A path as the commands show it: relative to the repository root where it lies inside."""
+    return str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path)
+
+
+def run_child(command: list[str]) -> dict:
+    """Run `command` from the repository root with this process's output; its wall time and peak RSS."""
+    print(f"$ {' '.join(command)}", flush=True)
+    start = time.perf_counter()
+    child = subprocess.Popen([sys.executable, *command[1:]], cwd=ROOT)
+    _, status, usage = os.wait4(child.pid, 0)  # the child's own resource usage, not all children's
+    child.returncode = os.waitstatus_to_exitcode(status)
+    if child.returncode != 0:
+        raise SystemExit(f"bench.paper: '{' '.join(command)}' failed (exit {child.returncode})")
+    return {"command": " ".join(command), "wall_s": round(time.perf_counter() - start, 1),
+            "peak_rss_mib": round(usage.ru_maxrss / 2**10, 1)}
+
+
+def train_step(experiment: Path, flags: list[str]) -> dict:
+    """train.py into `experiment`, resuming it where an earlier attempt left it."""
+    if (experiment / "experiment.json").is_file():
+        return {**run_child(["python", "train.py", "--resume", shown(experiment)]), "resumed": True}
+    return run_child(["python", "train.py", *flags, "--out", shown(experiment.parent), "--name", experiment.name])
+
+
+def oracle_rows(env: str, protocols: list[str], seeds: list[int]) -> tuple[list[dict], float]:
+    """The oracle bridge on every seed's test tasks under each protocol: one row per protocol and seed."""
+    from envs_jax import env_class
+    from jaxbridge.core.bridges import make_bridge
+    from jaxbridge.core.tasks import evaluation_batch
+    from jaxbridge.run.evaluate import run_bridge, summarise
+
+    start, rows = time.perf_counter(), []
+    for protocol in protocols:
+        batch = evaluation_batch(env_class(env), seeds, protocol=protocol)
+        for seed in summarise(batch, run_bridge(batch, make_bridge("oracle", batch.env))):
+            rows.append({"protocol": protocol, "seed": seed.seed, "tasks": seed.tasks,
+                         "solve_rate": f"{seed.solve_rate:.4f}"})
+    return rows, round(time.perf_counter() - start, 1)
+
+
+def test_protocol(run_dir: Path) -> str:
+    return json.loads((run_dir / "config.json").read_text())["test_protocol"]
+
+
+def results_rows(experiment: Path, renamed: dict[str, str] | None = None) -> list[dict]:
+    with open(experiment / "results.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    for row in rows:
+        row["approach"] = (renamed or {}).get(row["approach"], row["approach"])
+    return rows
+
+
+def csv_text(rows: list[dict]) -> str:
+    out = io.StringIO()
+    writer = csv.DictWriter(out, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return out.getvalue()
+
+
+def machine() -> dict:
+    import jax
+    return {"python": platform.python_version(), "jax": jax.__version__, "machine": platform.machine(),
+            "processor": platform.processor() or platform.machine(), "cpu_cores": os.cpu_count(),
+            "devices": f"{jax.device_count()} x {jax.devices()[0].device_kind}"}
+
+
+class Steps:
+    """The finished steps' figures, kept beside the runs so that a stopped command does not redo them."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.done = json.loads(path.read_text()) if path.is_file() else {}
+
+    def run(self, name: str, step) -> dict:
+        if name not in self.done:
+            self.done[name] = step()
+            self.path.write_text(json.dumps(self.done, indent=2) + "\n")
+        return self.done[name]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.paper", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", required=True, choices=ENVS, help="the env whose headline to regenerate")
+    parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "paper",
+                        help="where the training runs go (default: runs/paper)")
+    parser.add_argument("--records", type=Path, default=RECORDS,
+                        help="where the env's records go (default: docs/results)")
+    parser.add_argument("--num-seeds", type=int, default=TEST_SEEDS[1],
+                        help="test seeds from 200 (default: %(default)s; fewer only to try the command out)")
+    parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
+    args = parser.parse_args(argv)
+    first, count = TEST_SEEDS[0], args.num_seeds
+    seeds = ["--num-seeds", str(count), "--first-seed", str(first), "--cycles", str(args.cycles)]
+    env, runs = args.env, args.runs.resolve()
+    runs.mkdir(parents=True, exist_ok=True)
+    steps = Steps(runs / f"{env}-steps.json")
+    main_run, preset_run = runs / env, runs / f"{env}_authors"
+    start = time.perf_counter()
+
+    train = steps.run("train", lambda: train_step(main_run, ["--env", env, *seeds]))
+    preset = steps.run("train_authors_preset", lambda: train_step(
+        preset_run, ["--env", env, "--approaches", "ours", "--preset", "authors", *seeds]))
+    protocols = list(dict.fromkeys([test_protocol(main_run / "ours"), test_protocol(preset_run / "ours")]))
+    oracle = steps.run("oracle", lambda: dict(zip(("rows", "wall_s"), oracle_rows(env, protocols, list(range(first, first + count))))))
+    sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(main_run), "--sweep", "novelties"]))
+
+    out = args.records / env
+    out.mkdir(parents=True, exist_ok=True)
+    for experiment in (main_run, preset_run):  # the tables and figure as this checkout draws them
+        write_comparison(experiment, env, run_labels(json.loads((experiment / "experiment.json").read_text())["approaches"]))
+    rows = results_rows(main_run) + results_rows(preset_run, {"ours": PRESET_RUN})
+    (out / "results.csv").write_text(csv_text(rows))
+    (out / "oracle.csv").write_text(csv_text(oracle["rows"]))
+    shutil.copy(main_run / "sweep_novelties.csv", out / "sweep.csv")
+    shutil.copy(main_run / "sweep_novelties.png", out / "sweep.png")
+    shutil.copy(main_run / "curves.png", out / "figure.png")
+    experiment = json.loads((main_run / "experiment.json").read_text())
+    record = {"env": env, "commit": git_commit(), "command": f"python -m bench.paper --env {env}" + "".join(
+                  f" --{flag} {value}" for flag, value, default in (("num-seeds", count, TEST_SEEDS[1]), ("cycles", args.cycles, 100))
+                  if value != default),
+              "seeds": f"{first}-{first + count - 1}", "approaches": experiment["approaches"],
+              "config_version": json.loads((main_run / "ours" / "config.json").read_text())["config_version"],
+              "test_protocols": {"main": protocols[0], "authors_preset": protocols[-1]},
+              "steps": {"train": train, "train_authors_preset": preset,
+                        "oracle": {"protocols": protocols, "wall_s": oracle["wall_s"]}, "sweep": sweep},
+              "wall_s": round(sum(s["wall_s"] for s in (train, preset, sweep)) + oracle["wall_s"], 1),
+              "machine": machine()}
+    (out / "run.json").write_text(json.dumps(record, indent=2) + "\n")
+    print(f"bench.paper: {env} done ({time.perf_counter() - start:.0f} s in this call) -> {out}/; "
+          "render the docs with: python -m bench.render")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
