@@ -87,7 +87,7 @@ def parse_args(argv):
                    help=f"minibatch size of the updates (default: {d.batch_size}; the paper: 64)")
     p.add_argument("--call-planner-bonus", type=float,
                    help=f"extra reward when CallPlanner reaches the goal (the authors' code: 0.5; default: "
-                        f"{d.call_planner_bonus}, doorknobs 0.5; see docs/RESULTS.md)")
+                        f"{d.call_planner_bonus}, doorknobs 0.5; see docs/TUNING.md)")
     p.add_argument("--low-level-budget", type=positive_int, help="the low-level baselines' agent steps per cycle, in "
                    f"units of ours' env steps per cycle: 1 is the paper's budget (default: {d.low_level_budget})")
     p.add_argument("--checkpoint-every", type=positive_int,

@@ -32,8 +32,7 @@ import sys
 import time
 from pathlib import Path
 
-ENVS = ("light_switch_door", "doorknobs", "coffee")
-ROOT = Path(__file__).resolve().parents[1]
+from bench.records import BENCH, ENVS, ROOT, git_commit
 
 
 def rss_mib() -> float:
@@ -100,20 +99,6 @@ def in_fresh_process(env: str, args) -> dict:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-def table(results: dict) -> str:
-    head = ("| env | steps/s 1x1 | steps/s 8x10 | Q-updates/s (8 seeds) | s/cycle (8 seeds) | cycle compile s "
-            "| later compiles | tasks+tables s | peak RSS MiB (growth) |")
-    lines = [head, "|---" * (head.count("|") - 1) + "|"]
-    for env, r in results["envs"].items():
-        meta, c, u = r["meta_policy"]["cases"], r["cycle"], r["updates"]
-        lines.append(
-            f"| {env} | {meta['1 seed x 1 task']['steps_per_s']:,.0f} | {meta['8 seeds x 10 tasks']['steps_per_s']:,.0f} "
-            f"| {u['updates_per_s']:,.0f} ({u['updates']}/call) | {c['steady_s_per_cycle']:.3f} ({c['updates_per_cycle']} upd) "
-            f"| {c['compile_s']:.1f} | {c['programs_compiled_after_first_cycle']} | {c['build_s']:.1f} "
-            f"| {r['rss_peak_mib']:,.0f} (+{r['rss_growth_mib']:,.0f}) |")
-    return "\n".join(lines)
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -125,7 +110,7 @@ def main(argv=None) -> int:
     parser.add_argument("--cycles", type=int, default=None, help="measured cycles after the compiling one (default: 4)")
     parser.add_argument("--repeats", type=int, default=None, help="timed rollouts per meta-policy case (default: 20)")
     parser.add_argument("--update-repeats", type=int, default=None, help="timed update calls (default: 3)")
-    parser.add_argument("--out", type=Path, default=ROOT / "bench" / "results.json", help="JSON results (default: %(default)s)")
+    parser.add_argument("--out", type=Path, default=BENCH, help="JSON results (default: %(default)s)")
     parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     from jaxbridge.utils.cli import auto_or_positive_int
@@ -143,7 +128,8 @@ def main(argv=None) -> int:
         parser.error(f"unknown env {', '.join(unknown)}; choose from {', '.join(ENVS)}")
     import jax
     start = time.perf_counter()
-    results = {"date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"), "jax": jax.__version__,
+    results = {"date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"), "commit": git_commit(),
+               "jax": jax.__version__,
                "python": platform.python_version(), "machine": platform.machine(), "cpu_cores": os.cpu_count(),
                "load_before": [round(x, 2) for x in os.getloadavg()], "quick": quick,
                "settings": {"measured_cycles": args.cycles, "rollout_repeats": args.repeats,
@@ -159,7 +145,8 @@ def main(argv=None) -> int:
     print(f"jax {results['jax']}, {results['date']}, {results['cpu_cores']} cores, load {results['load_before'][0]} -> "
           f"{results['load_after'][0]}; meta-policy on 1 {first['meta_policy']['device'].split()[-1]} device, "
           f"cycle and updates over {first['devices']} device(s); {args.cycles} measured cycles")
-    print(table(results))
+    from bench.performance_blocks import bench_rows  # imports jax: only once every child has measured
+    print(bench_rows(results))
     print(f"total {results['total_s']:.0f} s -> {args.out}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=2) + "\n")

@@ -1,5 +1,5 @@
-"""The departure table of docs/RESULTS.md (issue #18): the effect of each departure from the authors' code
-that a config switches (docs/DESIGN.md, "Departures"), measured on the evaluation seeds.
+"""The departure table of docs/results/departures.md: the effect of each departure from the authors' code
+that a config switches (docs/DESIGN.md, "Departures"), measured on validation seeds from 100.
 
     python -m bench.departures --env light_switch_door [--num-seeds 16] [--out runs/departures]
                                [--rows all|NAME,...] [--directions minus,plus]
@@ -28,7 +28,7 @@ from jaxbridge.run.comparison import read_metrics
 from jaxbridge.run.experiments import train_approaches
 from jaxbridge.utils import stats
 
-FIRST_EVALUATION_SEED = 100
+FIRST_VALIDATION_SEED = 100
 CYCLES = (25, 100)  # the table's columns (a shorter run reports its last cycle)
 
 
@@ -83,7 +83,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--num-seeds", type=int, default=16,
-                        help=f"evaluation seeds {FIRST_EVALUATION_SEED}.. per run (default: %(default)s)")
+                        help=f"validation seeds {FIRST_VALIDATION_SEED}.. per run (default: %(default)s)")
     parser.add_argument("--out", type=Path, default=Path("runs/departures"), help="(default: %(default)s)")
     parser.add_argument("--cycles", type=int, default=100, help="cycles per run (default: %(default)s)")
     parser.add_argument("--rows", default="all", help="departures to measure, comma-separated, or all (default: all)")
@@ -98,13 +98,13 @@ def main() -> None:
     planned = runs(args.env, names, args.directions.split(","))
     results = {}
     for i, (name, config) in enumerate(planned.items(), 1):
-        config = dataclasses.replace(config, num_seeds=args.num_seeds, first_seed=FIRST_EVALUATION_SEED,
+        config = dataclasses.replace(config, num_seeds=args.num_seeds, first_seed=FIRST_VALIDATION_SEED,
                                      cycles=args.cycles)
         start = time.perf_counter()
         results[name] = train_or_read(config, args.out / args.env / name, devices)
         print(f"[{i}/{len(planned)}] {name}: {time.perf_counter() - start:.0f} s", flush=True)
 
-    seeds = f"{FIRST_EVALUATION_SEED}-{FIRST_EVALUATION_SEED + args.num_seeds - 1}"
+    seeds = f"{FIRST_VALIDATION_SEED}-{FIRST_VALIDATION_SEED + args.num_seeds - 1}"
     print(f"\n{args.env}, ours, seeds {seeds}: test solve rate, mean and IQM [95% bootstrap CI]\n")
     print("| run | what changes | " + " | ".join(f"mean at {c} | IQM at {c}" for c in CYCLES) + " |")
     print("|---|---|" + "---|---|" * len(CYCLES))

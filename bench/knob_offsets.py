@@ -1,7 +1,7 @@
 """How a Doorknobs bridge generalises over doorways: train seeds with config overrides (as bench.sweep),
 then ask each final greedy Q, at every knob offset a test doorway can show, which knob turn it would
 pick. A seed's training map shows it one or two doorways; the test maps' doorways lie over a range of
-offsets (docs/RESULTS.md, Doorknobs), and a bridge that turns the knob wrongly at some of them is the
+offsets (docs/TUNING.md), and a bridge that turns the knob wrongly at some of them is the
 failure left on the evaluation seeds (issue #19).
 
     python -m bench.knob_offsets --first-seed 0 --num-seeds 8 --cycles 100 updates_per_cycle=150

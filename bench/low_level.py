@@ -1,5 +1,5 @@
 """The low-level baselines against ours and Maple Q (issue 22): test solve rate against training steps on a
-log axis, one panel per env, and the table RESULTS.md quotes, from finished experiment directories.
+log axis, one panel per env, and the table docs/results/low_level.md quotes, from finished experiment directories.
 
     python -m bench.low_level runs/ll/lsd_16 runs/ll/lsd_sac_4 ... --figure docs/figures/low_level.png
 

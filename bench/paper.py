@@ -22,38 +22,15 @@ import argparse
 import csv
 import io
 import json
-import os
-import platform
 import shutil
-import subprocess
 import sys
 import time
 from pathlib import Path
 
-from bench.records import RECORDS, TEST_SEEDS, git_commit
+from bench.records import ENVS, RECORDS, ROOT, TEST_SEEDS, git_commit, machine, run_child, shown
+from bench.results_blocks import PRESET_RUN
 from jaxbridge.run.comparison import run_labels, write_comparison
 
-ROOT = Path(__file__).resolve().parents[1]
-ENVS = ("light_switch_door", "doorknobs", "coffee")
-PRESET_RUN = "ours_authors_preset"  # the record's name for ours with --preset authors
-
-
-def shown(path: Path) -> str:
-    """A path as the commands show it: relative to the repository root where it lies inside."""
-    return str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path)
-
-
-def run_child(command: list[str]) -> dict:
-    """Run `command` from the repository root with this process's output; its wall time and peak RSS."""
-    print(f"$ {' '.join(command)}", flush=True)
-    start = time.perf_counter()
-    child = subprocess.Popen([sys.executable, *command[1:]], cwd=ROOT)
-    _, status, usage = os.wait4(child.pid, 0)  # the child's own resource usage, not all children's
-    child.returncode = os.waitstatus_to_exitcode(status)
-    if child.returncode != 0:
-        raise SystemExit(f"bench.paper: '{' '.join(command)}' failed (exit {child.returncode})")
-    return {"command": " ".join(command), "wall_s": round(time.perf_counter() - start, 1),
-            "peak_rss_mib": round(usage.ru_maxrss / 2**10, 1)}
 
 
 def train_step(experiment: Path, flags: list[str]) -> dict:
@@ -97,13 +74,6 @@ def csv_text(rows: list[dict]) -> str:
     writer.writeheader()
     writer.writerows(rows)
     return out.getvalue()
-
-
-def machine() -> dict:
-    import jax
-    return {"python": platform.python_version(), "jax": jax.__version__, "machine": platform.machine(),
-            "processor": platform.processor() or platform.machine(), "cpu_cores": os.cpu_count(),
-            "devices": f"{jax.device_count()} x {jax.devices()[0].device_kind}"}
 
 
 class Steps:

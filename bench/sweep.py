@@ -1,6 +1,6 @@
 """Learning-reliability sweep: train many seeds at once with config overrides and print one row of
-test solve rates per seed (digit = floor(10 x rate), 9 = 0.9-1.0) and the summary used in
-docs/RESULTS.md.
+test solve rates per seed (digit = floor(10 x rate), 9 = 0.9-1.0) and a summary over seeds (the
+evidence of docs/TUNING.md).
 
     python -m bench.sweep --num-seeds 16 --first-seed 8 --cycles 40 batch_size=64 polyak_per=decision
 """

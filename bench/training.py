@@ -16,14 +16,14 @@ import time
 import jax
 import numpy as np
 
+from bench.records import authors_seed_run_s
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.grid import FIELDS, parse_value
 from jaxbridge.learn.devices import SeedMesh, describe, device_count_arg, select_devices
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
 
-# One seed, one approach, 100 cycles (results.md); Coffee: learning time only, the run never finished.
-AUTHORS_WHOLE_RUN_S = {"light_switch_door": 17_572, "doorknobs": 21_118, "coffee": 13_900}
+AUTHORS_WHOLE_RUN_S = authors_seed_run_s()  # one seed-run of the authors' "ours" (docs/results/authors_times.csv)
 
 
 def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None) -> dict:

@@ -1,4 +1,4 @@
-"""bench.sweep's reliability line (the figures the tuning records in docs/RESULTS.md quote) and its
+"""bench.sweep's reliability line (the figures docs/TUNING.md's evidence commands print) and its
 config overrides."""
 import numpy as np
 import pytest

@@ -210,3 +210,19 @@ def test_eval_hand_made_bridges_meet_the_test_tasks_train_py_would():
     sizes = lambda proc: {" ".join(line.split()[1:3]) for line in proc.stdout.splitlines() if line.split()[:1] == ["0"]}
     assert sizes(default) == {"4 cups"} and "protocol" not in default.stdout.splitlines()[0]
     assert "jaxbridge protocol" in variant.stdout.splitlines()[0]
+
+
+def test_train_runs_the_papers_figure_by_default_and_says_what_it_leaves_out():
+    from envs_jax import env_class
+    from jaxbridge.commands.train import default_approaches, start_line
+    from jaxbridge.core.config import TrainConfig
+
+    doorknobs = env_class("doorknobs")
+    approaches = default_approaches(doorknobs)  # the paper's Doorknobs figure: no feature selection timed out
+    assert approaches == ["ours", "no_callplanner", "random", "pure_planning", "maple_q"]
+    line = start_line(TrainConfig.for_env("doorknobs"), doorknobs, approaches)
+    assert line.startswith("doorknobs: training ours, no CallPlanner, random bridge, pure planning, Maple Q (pure RL) x 8 seeds")
+    assert "not no feature selection" in line and "--approaches all adds it" in line
+    assert default_approaches(env_class("coffee")) == ["ours", "no_feature_selection", "no_callplanner", "random",
+                                                       "pure_planning", "maple_q"]
+    assert "not " not in start_line(TrainConfig.for_env("coffee"), env_class("coffee"), ["ours"])

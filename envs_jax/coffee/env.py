@@ -104,7 +104,7 @@ class Coffee(NoveltyEnv):
                                  world.sweep_horizon)
     test_tasks = staticmethod(world.test_tasks)
     train_steps = TRAIN_STEPS
-    # Fewer updates: a cycle yields few bridge decisions, and 1000 updates overfit them (docs/RESULTS.md, Coffee).
+    # Fewer updates: a cycle yields few bridge decisions, and 1000 updates overfit them (docs/TUNING.md).
     # Tested on the authors' tasks, the distribution of their logged runs.
     train_defaults: ClassVar[dict] = {"updates_per_cycle": 250, "test_protocol": "authors"}
     test_protocols = world.TEST_PROTOCOLS

@@ -136,7 +136,7 @@ class Doorknobs(NoveltyEnv):
     train_steps = TRAIN_STEPS
     novelty_sweep = NoveltySweep("doors to the goal", f"on {SWEEP_MAP_SIZE}x{SWEEP_MAP_SIZE} maps, every door closed",
                                  SWEEP_DOORS, sweep_task, sweep_horizon)
-    # Chosen on the tuning seeds (docs/RESULTS.md, Doorknobs): the CallPlanner bonus breaks the tie with walking
+    # Chosen on the tuning seeds (docs/TUNING.md): the CallPlanner bonus breaks the tie with walking
     # through the opened door; the clipped, twin-network targets stop the Q drift; with the loop guard (which
     # stops a greedy bridge turning an open or clipped knob until the horizon) 500 updates a cycle learn
     # fastest (1000 drift again, 100-250 learn the slow seed later). Feature noise makes the knob turn carry
@@ -288,7 +288,7 @@ class Doorknobs(NoveltyEnv):
         One departure: each (|dx|, |dy|) pair is given larger first. The authors' order ties the offsets
         to the door's orientation (a robot in a vertical doorway sees (0.05, 0.125), in a horizontal one
         (0.125, 0.05)), and a seed whose one 2x2 training map only has it cross one kind of door then
-        turns knobs wrongly at the other kind on the test maps (docs/RESULTS.md, Doorknobs)."""
+        turns knobs wrongly at the other kind on the test maps (docs/TUNING.md)."""
         task = state.task
         room, in_any = self.robot_room(state)
         # The room's 4 door slots in ascending order (top < bottom < left < right), so that ties go to the

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import sys
 import time
@@ -58,13 +59,32 @@ def check_reachable(config: TrainConfig, env_cls) -> None:
 
 
 def default_approaches(env_cls) -> list[str]:
-    """What train.py trains when --approaches is not given (saying so where it is not all six)."""
-    approaches = list(env_cls.default_approaches or APPROACHES)
+    """What train.py trains when --approaches is not given: the paper's figure for the env."""
+    return list(env_cls.default_approaches or APPROACHES)
+
+
+# The quick start's measured times (bench.quickstart's record), where the checkout has them.
+QUICKSTART_RECORD = Path(__file__).resolve().parents[2] / "docs" / "results" / "quickstart.json"
+
+
+def start_line(config: TrainConfig, env_cls, approaches: list[str]) -> str:
+    """What this run trains, what the default leaves out, and how long the measured default took."""
+    from jaxbridge.learn.approaches import get_approach
+
+    line = (f"{env_cls.name}: training {', '.join(get_approach(a).label for a in approaches)} x {config.num_seeds} "
+            f"seeds x {config.cycles} cycles")
+    if approaches != default_approaches(env_cls):
+        return line
     skipped = [a for a in APPROACHES if a not in approaches]
     if skipped:
-        print(f"{env_cls.name}: not running {', '.join(skipped)} by default ({env_cls.why_not_all}); "
-              f"--approaches all runs them", file=sys.stderr)
-    return approaches
+        line += f"; not {', '.join(get_approach(a).label for a in skipped)} ({env_cls.why_not_all}): --approaches all adds it"
+    try:
+        measured = json.loads(QUICKSTART_RECORD.read_text())[env_cls.name]
+        line += (f"; 8 seeds x 100 cycles took {measured['wall_s'] / 60:.0f} minutes on {measured['machine']['cpu_cores']} "
+                 f"CPU cores (docs/PERFORMANCE.md)")
+    except (OSError, KeyError, ValueError):  # an installed copy without the records, or an env of your own
+        pass
+    return line
 
 
 def sweep_grid(texts: list[str] | None) -> dict[str, tuple]:
@@ -108,6 +128,8 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
     except OSError as err:
         raise UsageError(f"cannot write experiment directory {out / (name or env_cls.name)}: {err.strerror}") from None
     from jaxbridge.run.experiments import train_approaches  # after the refusals: it loads orbax (~0.2 s)
+    if is_primary():
+        print(start_line(config, env_cls, approaches), file=sys.stderr, flush=True)
     return out_dir, _releasing(lock, lambda: train_approaches(config, approaches, out_dir, progress, workers=workers,
                                                               devices=devices, replaced=replaced, grid=hyper_grid,
                                                               **_watch(interrupts, tensorboard)))

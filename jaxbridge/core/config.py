@@ -77,7 +77,7 @@ class TrainConfig:
     N = 5000, at most 100,000), then the weights that scored the lowest loss are restored."""
     batch_size: int = 256
     """Minibatch size (the paper: 64; 256 learns more reliably at the same number of updates, see
-    docs/RESULTS.md)."""
+    docs/TUNING.md)."""
     learning_rate: float = 1e-3
     """Adam step size (the paper: 1e-3; the authors reset Adam every cycle, ours keeps its state)."""
     gamma: float = 0.8
@@ -88,7 +88,7 @@ class TrainConfig:
     """Target-network soft update step (the paper: 0.0025)."""
     polyak_per: str = "update"
     """When the target takes a polyak step: after every minibatch "update" (ours), or per training bridge
-    "decision" (the authors' code). See docs/RESULTS.md for the comparison."""
+    "decision" (the authors' code). docs/TUNING.md gives the comparison."""
     hidden_sizes: tuple[int, ...] = (32, 32)
     """Q-network hidden layers (the paper: [32, 32])."""
     activation: str = "leaky_relu"

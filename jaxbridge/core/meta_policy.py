@@ -175,7 +175,7 @@ def guard_loops(ep: Episode, vec: jax.Array, skill_counts: jax.Array, can_plan: 
 
     In a deterministic env a skill that changed nothing changes nothing when chosen again in the same
     state with the same grounding and parameter, and a greedy bridge would choose it again until the
-    horizon (docs/RESULTS.md, Doorknobs). The whole skill is left out (the Q-function's argmax would land
+    horizon (docs/TUNING.md). The whole skill is left out (the Q-function's argmax would land
     on a nearby parameter again), so another parameter that would have worked is lost at this state.
     The set grows while the bridge decides in the same state and empties when it decides in another;
     where it would leave nothing to choose, nothing is left out."""

@@ -1,0 +1,129 @@
+"""The blocks of docs/PERFORMANCE.md and README.md that quote times, memory and headline figures: from
+bench.quickstart, bench.paper, bench.suite and python -m bench's records, beside the authors' run times."""
+from __future__ import annotations
+
+import json
+
+from bench.records import BENCH, QUICKSTART, SUITE, authors_seed_run_s
+from bench.results_blocks import ENV_TITLES, ENVS, env_record, label, machine_text, stat_row
+
+MISSING = "_Not measured yet: `{command}`._\n"
+
+
+def read(path) -> dict | None:
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def minutes(seconds: float) -> str:
+    return f"{seconds / 60:.0f} minutes" if seconds >= 90 else f"{seconds:.0f} s"
+
+
+def quickstart_table() -> str:
+    """Each env's `train.py --env E --num-seeds 8`: wall time, peak memory, and a seed-run's time against
+    the authors' (one seed of ours over 100 cycles)."""
+    records = read(QUICKSTART)
+    if records is None:
+        return MISSING.format(command="python -m bench.quickstart")
+    authors = authors_seed_run_s()
+    lines = ["| command | approaches x seeds | wall time | peak RSS | s per seed-run | the authors' s per seed-run (ours) | ratio |",
+             "|---|---|---|---|---|---|---|"]
+    for env in ENVS:
+        r = records.get(env)
+        if r is None:
+            continue
+        seed_runs = len(r["approaches"]) * 8
+        per_run = r["wall_s"] / seed_runs
+        lines.append(f"| `{r['command']}` | {len(r['approaches'])} x 8 | {r['wall_s']:,.0f} s | "
+                     f"{r['peak_rss_mib'] / 2**10:.2f} GiB | {per_run:.1f} | {authors[env]:,.0f} | {authors[env] / per_run:,.0f}x |")
+    first = next(iter(records.values()))
+    lines += ["", f"Measured by `python -m bench.quickstart` on {machine_text(first['machine'])}, commit "
+              f"{first['commit'][:10]}. A seed-run here is the whole experiment's wall time over its approaches "
+              "x seeds; the authors' is one seed of ours alone (docs/results/authors_times.csv; Coffee's run "
+              "never finished, so its learning time)."]
+    return "\n".join(lines) + "\n"
+
+
+def paper_table() -> str:
+    """Each env's test-seed headline (bench.paper): the time and memory of each of its steps."""
+    lines = ["| command | training (approaches x 32 seeds) | `--preset authors` | oracle | sweep | total | peak RSS |",
+             "|---|---|---|---|---|---|---|"]
+    for env in ENVS:
+        record = env_record(env)
+        if record is None:
+            lines.append(f"| `python -m bench.paper --env {env}` | not run yet | | | | | |")
+            continue
+        run, steps = record["run"], record["run"]["steps"]
+        peak = max(steps[s]["peak_rss_mib"] for s in ("train", "train_authors_preset", "sweep"))
+        lines.append(f"| `{run['command']}` | {steps['train']['wall_s']:,.0f} s ({len(run['approaches'])} approaches) | "
+                     f"{steps['train_authors_preset']['wall_s']:,.0f} s | {steps['oracle']['wall_s']:,.0f} s | "
+                     f"{steps['sweep']['wall_s']:,.0f} s | {run['wall_s']:,.0f} s | {peak / 2**10:.2f} GiB |")
+    return "\n".join(lines) + "\n"
+
+
+def bench_rows(results: dict) -> str:
+    """python -m bench's figures as a markdown table, one row per env."""
+    head = ("| env | env steps/s, 1 seed x 1 task | 8 seeds x 10 tasks | Q-updates/s (8 seeds) | s per cycle (8 seeds) "
+            "| first cycle's compile s | programs compiled after it | tasks + plan tables s | peak RSS MiB (growth) |")
+    lines = [head, "|---" * (head.count("|") - 1) + "|"]
+    for env, r in results["envs"].items():
+        meta, c, u = r["meta_policy"]["cases"], r["cycle"], r["updates"]
+        lines.append(
+            f"| {env} | {meta['1 seed x 1 task']['steps_per_s']:,.0f} | {meta['8 seeds x 10 tasks']['steps_per_s']:,.0f} "
+            f"| {u['updates_per_s']:,.0f} ({u['updates']}/call) | {c['steady_s_per_cycle']:.3f} ({c['updates_per_cycle']} updates) "
+            f"| {c['compile_s']:.1f} | {c['programs_compiled_after_first_cycle']} | {c['build_s']:.1f} "
+            f"| {r['rss_peak_mib']:,.0f} (+{r['rss_growth_mib']:,.0f}) |")
+    return "\n".join(lines)
+
+
+def bench_table() -> str:
+    """python -m bench's table (bench/results.json) and how it was measured."""
+    results = read(BENCH)
+    if results is None:
+        return MISSING.format(command="python -m bench")
+    commit = f", commit {results['commit'][:10]}" if "commit" in results else ""
+    lines = [bench_rows(results), "", f"`python -m bench` on {results['cpu_cores']} cores (jax {results['jax']}{commit}), "
+             f"load {results['load_before'][0]} before; {results['settings']['measured_cycles']} measured cycles."]
+    return "\n".join(lines) + "\n"
+
+
+def suite_line() -> str:
+    record = read(SUITE)
+    if record is None:
+        return MISSING.format(command="python -m bench.suite")
+    return (f"`{record['command']}`: {record['outcome']} in {record['wall_s']:,.0f} s ({minutes(record['wall_s'])}) "
+            f"on {machine_text(record['machine'])}, commit {record['commit'][:10]} (`python -m bench.suite`).\n")
+
+
+def readme_quickstart() -> str:
+    """The README's sentence on what its first command trains, how long it takes, and what it prints."""
+    record = (read(QUICKSTART) or {}).get("light_switch_door")
+    if record is None:
+        return MISSING.format(command="python -m bench.quickstart")
+    authors = authors_seed_run_s()["light_switch_door"]
+    finals = ", ".join(f"{label(a)} {v:.2f}" for a, v in record["final_test_solve_rate"].items())
+    return (f"The first line trains the paper's {len(record['approaches'])} approaches on Light Switch Door, 8 tuning "
+            f"seeds (0-7) x 100 online learning cycles each (the paper's protocol), every approach's seeds in one "
+            f"jitted computation sharded over the cores: {minutes(record['wall_s'])} ({record['wall_s']:,.0f} s, peak "
+            f"RSS {record['peak_rss_mib'] / 2**10:.1f} GiB) on {machine_text(record['machine'])}; the authors' code "
+            f"takes {authors / 3600:.1f} hours for one seed of one approach. It ends printing each approach's mean "
+            f"test solve rate at cycle 100 ({finals} on the measuring machine; another CPU's floating-point "
+            f"path moves single seeds) and writes `runs/light_switch_door/`:\n")
+
+
+def readme_env(env: str) -> str:
+    """The README's line for `env`: its quick start's time and its test-seed headline."""
+    quick = (read(QUICKSTART) or {}).get(env)
+    record = env_record(env)
+    trains = (f"`python train.py --env {env} --num-seeds 8` trains {', '.join(label(a) for a in quick['approaches'])} "
+              f"in {minutes(quick['wall_s'])}" if quick else f"`python train.py --env {env} --num-seeds 8`")
+    if record is None:
+        return f"* {ENV_TITLES[env]} (`{env}`): {trains}; its test-seed headline is not generated yet.\n"
+    ours = stat_row(record, "ours")
+    return (f"* {ENV_TITLES[env]} (`{env}`): {trains}. On the {ours['seeds']} test seeds ({record['run']['seeds']}) "
+            f"ours' mean test solve rate is {ours['at10']} at cycle 10 and {ours['at100']} at cycle 100 (95% CIs); "
+            f"the oracle's ceiling on the same tasks is {ours['ceiling']} (docs/RESULTS.md).\n")
+
+
+BLOCKS = {"performance quickstart": quickstart_table, "performance paper": paper_table,
+          "performance bench": bench_table, "performance suite": suite_line, "readme quickstart": readme_quickstart,
+          **{f"readme {env}": (lambda env=env: readme_env(env)) for env in ENVS}}

@@ -1,0 +1,179 @@
+"""The blocks of docs/RESULTS.md and docs/results/generalisation.md: each env's headline table and its
+generalisation sweep, from bench.paper's records and the authors' logged numbers."""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+from bench.records import ENVS, RECORDS
+from envs_jax import env_class
+from jaxbridge.learn.approaches import get_approach
+
+ENV_TITLES = {"light_switch_door": "Light Switch Door", "doorknobs": "Doorknobs", "coffee": "Coffee"}
+PRESET_RUN = "ours_authors_preset"  # the records' name for ours with --preset authors (bench.paper)
+CYCLES = (10, 25, 50, 100)
+
+
+def label(run: str) -> str:
+    return "ours, `--preset authors`" if run == PRESET_RUN else get_approach(run).label
+
+
+# ---------------------------------------------------------------- reading the records
+
+def read_csv(path: Path) -> list[dict]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def read_json(path: Path) -> dict | None:
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def env_record(env: str) -> dict | None:
+    """An env's bench.paper records, or None before bench.paper has written them."""
+    folder = RECORDS / env
+    run = read_json(folder / "run.json")
+    if run is None:
+        return None
+    return {"run": run, "results": read_csv(folder / "results.csv"), "oracle": read_csv(folder / "oracle.csv"),
+            "sweep": read_csv(folder / "sweep.csv")}
+
+
+def authors_rows(env: str) -> dict[str, dict[tuple[str, str], dict]]:
+    """{approach: {(quantity, cycle): row}} of the authors' logged numbers for `env`."""
+    out: dict[str, dict] = {}
+    for row in read_csv(RECORDS / "authors.csv"):
+        if row["env"] == env:
+            out.setdefault(row["approach"], {})[(row["quantity"], row["cycle"])] = row
+    return out
+
+
+# ---------------------------------------------------------------- cells
+
+def interval(value: float, low: float, high: float) -> str:
+    return f"{value:.2f}" if f"{low:.2f}" == f"{high:.2f}" else f"{value:.2f} [{low:.2f}, {high:.2f}]"
+
+
+def stat_cell(row: dict, name: str) -> str:
+    """Mean [95% CI] and, beside it, IQM [95% CI] of curve `name` in a results.csv row."""
+    f = lambda s: float(row[f"{name}_{s}"])
+    mean = interval(f("mean"), f("mean_low"), f("mean_high"))
+    iqm = interval(f("iqm"), f("iqm_low"), f("iqm_high"))
+    return f"{mean}<br>IQM {iqm}"
+
+
+def mean_ci(values: list[float]) -> str:
+    import numpy as np
+    from jaxbridge.utils import stats
+    described = stats.describe(np.asarray(values))
+    return interval(float(described["mean"]), float(described["mean_low"]), float(described["mean_high"]))
+
+
+def authors_cell(row: dict | None) -> str:
+    """The authors' number as their logs give it: mean [lowest, highest seed] (note)."""
+    if row is None:
+        return ""
+    low, high = row["min"], row["max"]
+    return (row["mean"] + (f" [{low}, {high}]" if low and high and low != high else "")
+            + (f" ({row['note']})" if row["note"] else ""))
+
+
+def authors_test_cells(theirs: dict, cycles) -> list[str]:
+    """The authors' test solve rate at `cycles`; a single evaluation (pure planning) in the first cell."""
+    single = theirs.get(("test_solve_rate", ""))
+    if single:
+        return [authors_cell(single)] + [""] * (len(cycles) - 1)
+    return [authors_cell(theirs.get(("test_solve_rate", str(c)))) for c in cycles]
+
+
+# ---------------------------------------------------------------- blocks
+
+def headline(env: str) -> str:
+    """RESULTS.md's table for `env`: every approach, ours with --preset authors, the oracle's ceiling
+    under each test protocol, and the authors' logged numbers, with the command that made them."""
+    record = env_record(env)
+    if record is None:
+        return f"_Not generated yet: `python -m bench.paper --env {env}`._\n"
+    run, rows = record["run"], record["results"]
+    by_run = {}
+    for row in rows:
+        by_run.setdefault(row["approach"], {})[int(row["cycle"])] = row
+    last = max(max(cycles) for cycles in by_run.values())
+    authors = authors_rows(env)
+    lines = [f"Test seeds {run['seeds']}, {int(rows[0]['seeds'])} seeds x {last} cycles; each cell: mean [95% CI] "
+             f"over seeds, IQM [95% CI] beside it; the authors' rows: their mean [lowest, highest seed] "
+             "(docs/results/authors.csv).", "",
+             "| approach | cycle " + " | cycle ".join(map(str, CYCLES)) + f" | smooth reward at {last} (test) | (training) |",
+             "|---|" + "---|" * (len(CYCLES) + 2)]
+    for name, cycles in by_run.items():
+        final = cycles[last]
+        lines.append(f"| **{label(name)}** | " + " | ".join(
+            stat_cell(cycles[c], "test_solve_rate") if c in cycles else "" for c in CYCLES)
+            + f" | {stat_cell(final, 'test_smooth_reward')} | {stat_cell(final, 'train_smooth_reward')} |")
+        theirs = authors.get(name) if name != PRESET_RUN else None
+        if theirs:
+            seeds = next(iter(theirs.values()))["seeds_with_logs"]
+            lines.append(f"| {label(name)}, the authors ({seeds} seeds) | " + " | ".join(authors_test_cells(theirs, CYCLES))
+                         + f" | {authors_cell(theirs.get(('smooth_reward', '100')))} | |")
+    for protocol in run["steps"]["oracle"]["protocols"]:
+        which = [k for k, v in run["test_protocols"].items() if v == protocol]
+        cell = ceiling(record, protocol)
+        lines.append(f"| the oracle's ceiling ({protocol} test tasks: "
+                     + " and ".join("the runs above" if k == "main" else "the preset's" for k in which) + ") | "
+                     + " | ".join([cell] * len(CYCLES)) + f" | {cell} | |")
+    steps = run["steps"]
+    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (training "
+              f"{steps['train']['wall_s']:,.0f} s, peak RSS {steps['train']['peak_rss_mib'] / 2**10:.1f} GiB; "
+              f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), commit {run['commit'][:10]}.", "",
+              f"![{ENV_TITLES[env]}, test seeds](results/{env}/figure.png)"]
+    return "\n".join(lines) + "\n"
+
+
+def ceiling(record: dict, protocol: str) -> str:
+    """The oracle's mean test solve rate [95% CI] over seeds under `protocol`."""
+    return mean_ci([float(r["solve_rate"]) for r in record["oracle"] if r["protocol"] == protocol])
+
+
+def stat_row(record: dict, run: str) -> dict:
+    """The figures the README quotes for `run`: seeds, mean [95% CI] at cycles 10 and 100, the ceiling."""
+    rows = {int(r["cycle"]): r for r in record["results"] if r["approach"] == run}
+    mean = lambda c: interval(*(float(rows[c][f"test_solve_rate_{s}"]) for s in ("mean", "mean_low", "mean_high")))
+    return {"seeds": int(rows[1]["seeds"]), "at10": mean(10), "at100": mean(max(rows)),
+            "ceiling": ceiling(record, record["run"]["test_protocols"]["main"])}
+
+
+def machine_text(machine: dict) -> str:
+    return f"{machine['cpu_cores']} {machine['processor']} cores (jax {machine['jax']})"
+
+
+def sweep_table(env: str) -> str:
+    """generalisation.md's table for `env`: solve rate per novelty count (rows) and approach (columns)."""
+    record = env_record(env)
+    if record is None:
+        return f"_Not generated yet: `python -m bench.paper --env {env}`._\n"
+    counted = [k for k in record["sweep"][0] if k not in ("line", "seed", "tasks", "solve_rate")][0]
+    lines_by_label: dict[str, dict[int, list[float]]] = {}
+    for row in record["sweep"]:
+        lines_by_label.setdefault(row["line"], {}).setdefault(int(row[counted]), []).append(
+            float(row["solve_rate"]) if row["solve_rate"] else float("nan"))
+    labels = list(lines_by_label)
+    counts = sorted(next(iter(lines_by_label.values())))
+    tasks = record["sweep"][0]["tasks"]
+    sweep = env_class(env).novelty_sweep
+    out = [f"The number of {sweep.counted} {sweep.setting}: test seeds {record['run']['seeds']}' final bridges, "
+           f"{tasks} tasks per count and seed; mean [95% CI] over seeds (`{record['run']['steps']['sweep']['command']}`).", "",
+           f"| {counted.replace('_', ' ')} | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    for k in counts:
+        cells = []
+        for label in labels:
+            values = lines_by_label[label][k]
+            cells.append("n/a" if all(v != v for v in values) else mean_ci(values))
+        out.append(f"| {k} | " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n" + f"\n![{ENV_TITLES[env]}, generalisation](./{env}/sweep.png)\n"
+
+
+BLOCKS = {**{f"headline {env}": (lambda env=env: headline(env)) for env in ENVS},
+          **{f"sweep {env}": (lambda env=env: sweep_table(env)) for env in ENVS}}
+
+

@@ -1,0 +1,50 @@
+"""The docs' numbers are their records': every generated block of README.md, docs/RESULTS.md,
+docs/PERFORMANCE.md and docs/results/generalisation.md re-renders from docs/results/ to what is
+committed, and a number edited by hand is caught."""
+import json
+import re
+
+import pytest
+
+from bench import paper, render
+from bench.records import ROOT
+
+
+@pytest.mark.parametrize("doc", render.DOCS)
+def test_the_docs_are_what_their_records_render(doc):
+    text = (ROOT / doc).read_text()
+    assert render.BLOCK.search(text), f"{doc} has no generated block"
+    assert render.stale_blocks(text) == [], f"{doc} differs from its records: run python -m bench.render"
+
+
+def test_a_number_edited_by_hand_is_caught():
+    text = (ROOT / "docs" / "RESULTS.md").read_text()
+    block = next(m for m in render.BLOCK.finditer(text) if re.search(r"\d", m["body"]))
+    digit = re.search(r"\d", block["body"])
+    edited_body = block["body"][:digit.start()] + str((int(digit[0]) + 1) % 10) + block["body"][digit.end():]
+    edited = text[:block.start("body")] + edited_body + text[block.end("body"):]
+    assert render.stale_blocks(edited) == [block["name"]]
+    assert render.rendered(edited) == text  # rendering puts the record's number back
+
+
+def test_an_unknown_block_is_refused():
+    with pytest.raises(SystemExit, match="unknown generated block 'no such'"):
+        render.rendered("<!-- generated: no such -->\nx\n<!-- end generated: no such -->\n")
+
+
+def test_the_headline_quotes_the_authors_logged_numbers():
+    rows = render.results_blocks.authors_rows("light_switch_door")
+    cells = render.results_blocks.authors_test_cells(rows["ours"], (10, 25, 50, 100))
+    assert cells == ["0.33 [0, 1]", "0.72 [0, 1]", "0.57 [0, 1]", "0.64 [0, 1]"]
+    single = render.results_blocks.authors_test_cells(rows["pure_planning"], (10, 25))
+    assert single == ["0 (single evaluation)", ""]
+
+
+def test_a_finished_step_is_not_run_again(tmp_path):
+    calls = []
+    steps = paper.Steps(tmp_path / "steps.json")
+    assert steps.run("train", lambda: calls.append(1) or {"wall_s": 1.0}) == {"wall_s": 1.0}
+    again = paper.Steps(tmp_path / "steps.json")  # a later call of the command
+    assert again.run("train", lambda: calls.append(2) or {"wall_s": 9.0}) == {"wall_s": 1.0}
+    assert calls == [1]
+    assert json.loads((tmp_path / "steps.json").read_text()) == {"train": {"wall_s": 1.0}}
