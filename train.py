@@ -68,9 +68,9 @@ def parse_args(argv):
                         "with horizon 100, Light Switch Door's fixed horizon 30 (default: the preset's, else the "
                         "env's first)")
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
-                   help="comma-separated approaches to train, or all (default: all, the paper's six: "
-                        f"{', '.join(APPROACHES)}; doorknobs: all but no_feature_selection and maple_q; by name "
-                        f"only: {', '.join(LOW_LEVEL)})")
+                   help="comma-separated approaches to train, or all (default: the paper's figure for the env: "
+                        f"the six, {', '.join(APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
+                        f"Doorknobs figure; by name only: {', '.join(LOW_LEVEL)})")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,
