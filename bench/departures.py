@@ -9,8 +9,8 @@ Per row, our method is trained twice: our default with that one setting set to t
 ("plus": what it would buy them); plus the two references, our default and the authors' preset. Each
 run is an experiment directory under --out/<env>/<run>; a finished run is read back, a started one
 resumed, so the command continues where it stopped. Prints the table: mean and IQM test solve rate at
-cycles 25 and 100 with 95% bootstrap intervals over the seeds. About 1.5-4 minutes per run of 16 seeds
-on 2 cores (Light Switch Door: 9 rows, 20 runs).
+cycles 25 and 100 with 95% bootstrap intervals over the seeds. Each run of 16 seeds takes minutes on
+2 cores; `--rows` picks fewer rows (two runs each, plus the two references).
 """
 from __future__ import annotations
 

@@ -22,10 +22,12 @@ def test_the_sweeps_reliability_figures_count_late_dips_and_low_means():
 
 def test_bench_overrides_are_read_as_train_py_sweep_reads_them_and_bad_ones_are_argparse_errors(capsys):
     parser = sweep_parser("probe", "doorknobs", 1, 0, 1)
-    args = parser.parse_args(["feature_noise=0", "loop_guard=false", "hidden_sizes=64x16"])
+    args = parser.parse_args(["feature_noise=0", "loop_guard=false", "hidden_sizes=64x16", "env_quirks=raw_offsets"])
     config, changes = swept_config(args)
-    assert changes == {"feature_noise": 0.0, "loop_guard": False, "hidden_sizes": (64, 16)}
+    assert changes == {"feature_noise": 0.0, "loop_guard": False, "hidden_sizes": (64, 16), "env_quirks": ("raw_offsets",)}
     assert (config.feature_noise, config.loop_guard, config.hidden_sizes) == (0.0, False, (64, 16))
+    assert config.env_quirks == ("raw_offsets",)
+    assert swept_config(parser.parse_args(["env_quirks=none"]))[0].env_quirks == ()
     for bad, message in (("feature_noise=abc", "feature_noise: expected a number, got 'abc'"),
                          ("no_such_field=1", "expected a TrainConfig field as name=value, got 'no_such_field=1'"),
                          ("feature_noise", "expected a TrainConfig field as name=value, got 'feature_noise'")):

@@ -21,8 +21,8 @@ SWEEPABLE = tuple(name for name in FIELDS if name not in NOT_SWEPT)
 
 
 def parse_value(key: str, text: str):
-    """`text` as a value of TrainConfig field `key` (booleans: true/false/1/0; hidden_sizes: 64x64);
-    ValueError (one line) if it is not one."""
+    """`text` as a value of TrainConfig field `key` (booleans: true/false/1/0; hidden_sizes: 64x64;
+    env_quirks: names joined by + or none); ValueError (one line) if it is not one."""
     kind = typing.get_type_hints(TrainConfig)[key]
     try:
         if kind is bool:
@@ -35,6 +35,8 @@ def parse_value(key: str, text: str):
             return float(text)
         if key == "hidden_sizes":  # e.g. 64x64
             return tuple(int(w) for w in text.split("x"))
+        if key == "env_quirks":  # e.g. raw_offsets, or a+b (a comma would start the next value of a sweep)
+            return () if text == "none" else tuple(text.split("+"))
         return text
     except ValueError:
         expected = {"hidden_sizes": "widths like 64x64", bool: "true or false", int: "an integer",
