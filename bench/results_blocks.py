@@ -6,9 +6,12 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
+
 from bench.records import ENVS, RECORDS
 from envs_jax import env_class
 from jaxbridge.learn.approaches import get_approach
+from jaxbridge.utils import stats
 
 ENV_TITLES = {"light_switch_door": "Light Switch Door", "doorknobs": "Doorknobs", "coffee": "Coffee"}
 PRESET_RUN = "ours_authors_preset"  # the records' name for ours with --preset authors (bench.paper)
@@ -52,6 +55,7 @@ def authors_rows(env: str) -> dict[str, dict[tuple[str, str], dict]]:
 # ---------------------------------------------------------------- cells
 
 def interval(value: float, low: float, high: float) -> str:
+    """"0.85 [0.70, 0.95]", or the value alone where the interval rounds to one point."""
     return f"{value:.2f}" if f"{low:.2f}" == f"{high:.2f}" else f"{value:.2f} [{low:.2f}, {high:.2f}]"
 
 
@@ -64,8 +68,7 @@ def stat_cell(row: dict, name: str) -> str:
 
 
 def mean_ci(values: list[float]) -> str:
-    import numpy as np
-    from jaxbridge.utils import stats
+    """Mean [95% bootstrap CI] over seeds of per-seed values."""
     described = stats.describe(np.asarray(values))
     return interval(float(described["mean"]), float(described["mean_low"]), float(described["mean_high"]))
 
@@ -95,39 +98,51 @@ def headline(env: str) -> str:
     record = env_record(env)
     if record is None:
         return f"_Not generated yet: `python -m bench.paper --env {env}`._\n"
-    run, rows = record["run"], record["results"]
-    by_run = {}
-    for row in rows:
+    run = record["run"]
+    by_run: dict[str, dict[int, dict]] = {}
+    for row in record["results"]:
         by_run.setdefault(row["approach"], {})[int(row["cycle"])] = row
     last = max(max(cycles) for cycles in by_run.values())
-    authors = authors_rows(env)
-    lines = [f"Test seeds {run['seeds']}, {int(rows[0]['seeds'])} seeds x {last} cycles; each cell: mean [95% CI] "
-             f"over seeds, IQM [95% CI] beside it; the authors' rows: their mean [lowest, highest seed] "
-             "(docs/results/authors.csv).", "",
+    lines = [f"Test seeds {run['seeds']}, {int(record['results'][0]['seeds'])} seeds x {last} cycles; each cell: "
+             "mean [95% CI] over seeds, IQM [95% CI] beside it; the authors' rows: their mean [lowest, highest "
+             "seed] (docs/results/authors.csv).", "",
              "| approach | cycle " + " | cycle ".join(map(str, CYCLES)) + f" | smooth reward at {last} (test) | (training) |",
              "|---|" + "---|" * (len(CYCLES) + 2)]
+    authors = authors_rows(env)
     for name, cycles in by_run.items():
-        final = cycles[last]
         lines.append(f"| **{label(name)}** | " + " | ".join(
             stat_cell(cycles[c], "test_solve_rate") if c in cycles else "" for c in CYCLES)
-            + f" | {stat_cell(final, 'test_smooth_reward')} | {stat_cell(final, 'train_smooth_reward')} |")
-        theirs = authors.get(name) if name != PRESET_RUN else None
-        if theirs:
-            seeds = next(iter(theirs.values()))["seeds_with_logs"]
-            lines.append(f"| {label(name)}, the authors ({seeds} seeds) | " + " | ".join(authors_test_cells(theirs, CYCLES))
-                         + f" | {authors_cell(theirs.get(('smooth_reward', '100')))} | |")
-    for protocol in run["steps"]["oracle"]["protocols"]:
-        which = [k for k, v in run["test_protocols"].items() if v == protocol]
-        cell = ceiling(record, protocol)
-        lines.append(f"| the oracle's ceiling ({protocol} test tasks: "
-                     + " and ".join("the runs above" if k == "main" else "the preset's" for k in which) + ") | "
-                     + " | ".join([cell] * len(CYCLES)) + f" | {cell} | |")
-    steps = run["steps"]
-    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (training "
-              f"{steps['train']['wall_s']:,.0f} s, peak RSS {steps['train']['peak_rss_mib'] / 2**10:.1f} GiB; "
-              f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), commit {run['commit'][:10]}.", "",
-              f"![{ENV_TITLES[env]}, test seeds](results/{env}/figure.png)"]
+            + f" | {stat_cell(cycles[last], 'test_smooth_reward')} | {stat_cell(cycles[last], 'train_smooth_reward')} |")
+        if name in authors and name != PRESET_RUN:
+            lines.append(authors_row(name, authors[name]))
+    lines += ceiling_rows(record) + ["", provenance(run), "", f"![{ENV_TITLES[env]}, test seeds](results/{env}/figure.png)"]
     return "\n".join(lines) + "\n"
+
+
+def authors_row(name: str, theirs: dict) -> str:
+    seeds = next(iter(theirs.values()))["seeds_with_logs"]
+    return (f"| {label(name)}, the authors ({seeds} seeds) | " + " | ".join(authors_test_cells(theirs, CYCLES))
+            + f" | {authors_cell(theirs.get(('smooth_reward', '100')))} | |")
+
+
+def ceiling_rows(record: dict) -> list[str]:
+    """The oracle's ceiling under each test protocol of the record's runs, as a flat table row."""
+    rows = []
+    for protocol in record["run"]["steps"]["oracle"]["protocols"]:
+        which = [k for k, v in record["run"]["test_protocols"].items() if v == protocol]
+        cell = ceiling(record, protocol)
+        rows.append(f"| the oracle's ceiling ({protocol} test tasks: "
+                    + " and ".join("the runs above" if k == "main" else "the preset's" for k in which) + ") | "
+                    + " | ".join([cell] * len(CYCLES)) + f" | {cell} | |")
+    return rows
+
+
+def provenance(run: dict) -> str:
+    """The command that made the record, its time, memory, machine and commit."""
+    steps = run["steps"]
+    return (f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (training "
+            f"{steps['train']['wall_s']:,.0f} s, peak RSS {steps['train']['peak_rss_mib'] / 2**10:.1f} GiB; "
+            f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), commit {run['commit'][:10]}.")
 
 
 def ceiling(record: dict, protocol: str) -> str:
@@ -157,18 +172,14 @@ def sweep_table(env: str) -> str:
     for row in record["sweep"]:
         lines_by_label.setdefault(row["line"], {}).setdefault(int(row[counted]), []).append(
             float(row["solve_rate"]) if row["solve_rate"] else float("nan"))
-    labels = list(lines_by_label)
     counts = sorted(next(iter(lines_by_label.values())))
     tasks = record["sweep"][0]["tasks"]
     sweep = env_class(env).novelty_sweep
-    out = [f"The number of {sweep.counted} {sweep.setting}: test seeds {record['run']['seeds']}' final bridges, "
+    out = [f"The number of {sweep.counted} {sweep.setting}: the final bridges of test seeds {record['run']['seeds']}, "
            f"{tasks} tasks per count and seed; mean [95% CI] over seeds (`{record['run']['steps']['sweep']['command']}`).", "",
-           f"| {counted.replace('_', ' ')} | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+           f"| {counted.replace('_', ' ')} | " + " | ".join(lines_by_label) + " |", "|---|" + "---|" * len(lines_by_label)]
     for k in counts:
-        cells = []
-        for label in labels:
-            values = lines_by_label[label][k]
-            cells.append("n/a" if all(v != v for v in values) else mean_ci(values))
+        cells = ["n/a" if np.isnan(by_count[k]).all() else mean_ci(by_count[k]) for by_count in lines_by_label.values()]
         out.append(f"| {k} | " + " | ".join(cells) + " |")
     return "\n".join(out) + "\n" + f"\n![{ENV_TITLES[env]}, generalisation](./{env}/sweep.png)\n"
 
