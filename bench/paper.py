@@ -84,8 +84,10 @@ class Steps:
         self.done = json.loads(path.read_text()) if path.is_file() else {}
 
     def run(self, name: str, step) -> dict:
+        """`step()`'s figures, run now unless an earlier call finished it; saved at once."""
         if name not in self.done:
-            self.done[name] = step()
+            commit = git_commit()  # the code the step runs (a later record step may be at another commit)
+            self.done[name] = {**step(), "commit": commit}
             self.path.write_text(json.dumps(self.done, indent=2) + "\n")
         return self.done[name]
 

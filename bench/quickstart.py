@@ -4,7 +4,7 @@
     python -m bench.quickstart --envs doorknobs
 
 Runs `python train.py --env E --num-seeds 8` (the approaches of the paper's figure for E, tuning seeds
-0-7, 100 cycles) in a child process into a temporary directory, and records its wall time, its peak
+0-7, 100 cycles) in a child process into a temporary directory (or --keep DIR), and records its wall time, its peak
 resident memory, what it trained and the mean test solve rate it reports at the last cycle per approach
 (on tuning seeds: what the quick start should print, not a claim). The README and docs/PERFORMANCE.md
 quote these records (python -m bench.render); train.py's start-up line quotes the time.
@@ -20,12 +20,12 @@ from pathlib import Path
 from bench.records import ENVS, QUICKSTART, git_commit, machine, run_child
 
 
-def measure(env: str) -> dict:
-    with tempfile.TemporaryDirectory() as tmp:
-        step = run_child(["python", "train.py", "--env", env, "--num-seeds", "8", "--out", tmp, "--name", env])
-        experiment = json.loads((Path(tmp) / env / "experiment.json").read_text())
-        final = {a: round(json.loads((Path(tmp) / env / a / "summary.json").read_text())
-                          ["per_cycle"]["test_solve_rate"]["mean"][-1], 2) for a in experiment["approaches"]}
+def measure(env: str, out: Path) -> dict:
+    """Train the env's quick start into out/ENV (which must not exist) and read back what it reports."""
+    step = run_child(["python", "train.py", "--env", env, "--num-seeds", "8", "--out", str(out), "--name", env])
+    experiment = json.loads((out / env / "experiment.json").read_text())
+    final = {a: round(json.loads((out / env / a / "summary.json").read_text())
+                      ["per_cycle"]["test_solve_rate"]["mean"][-1], 2) for a in experiment["approaches"]}
     return {"command": f"python train.py --env {env} --num-seeds 8", "wall_s": step["wall_s"],
             "peak_rss_mib": step["peak_rss_mib"], "approaches": experiment["approaches"], "seeds": "0-7",
             "final_test_solve_rate": final, "commit": git_commit(), "machine": machine()}
@@ -35,6 +35,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.quickstart", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--envs", default=",".join(ENVS), help="comma-separated envs (default: all three)")
+    parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
+                        help="train into DIR/ENV and keep the runs (default: a temporary directory, removed)")
     args = parser.parse_args(argv)
     envs = args.envs.split(",")
     unknown = [e for e in envs if e not in ENVS]
@@ -42,7 +44,11 @@ def main(argv=None) -> int:
         parser.error(f"unknown env {', '.join(unknown)}; choose from {', '.join(ENVS)}")
     records = json.loads(QUICKSTART.read_text()) if QUICKSTART.is_file() else {}
     for env in envs:
-        records[env] = measure(env)
+        if args.keep is not None:
+            records[env] = measure(env, args.keep)
+        else:
+            with tempfile.TemporaryDirectory() as tmp:
+                records[env] = measure(env, Path(tmp))
         QUICKSTART.write_text(json.dumps(records, indent=2) + "\n")  # each env as soon as it is measured
         print(f"bench.quickstart: {env} {records[env]['wall_s']:.0f} s, peak RSS "
               f"{records[env]['peak_rss_mib'] / 2**10:.2f} GiB -> {QUICKSTART}", flush=True)

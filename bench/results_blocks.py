@@ -142,7 +142,8 @@ def provenance(run: dict) -> str:
     steps = run["steps"]
     return (f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (training "
             f"{steps['train']['wall_s']:,.0f} s, peak RSS {steps['train']['peak_rss_mib'] / 2**10:.1f} GiB; "
-            f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), commit {run['commit'][:10]}.")
+            f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), trained at commit "
+            f"{steps['train'].get('commit', run['commit'])[:10]}.")
 
 
 def ceiling(record: dict, protocol: str) -> str:

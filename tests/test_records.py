@@ -40,11 +40,12 @@ def test_the_headline_quotes_the_authors_logged_numbers():
     assert single == ["0 (single evaluation)", ""]
 
 
-def test_a_finished_step_is_not_run_again(tmp_path):
+def test_a_finished_step_is_not_run_again_and_keeps_the_commit_it_ran_at(tmp_path):
     calls = []
     steps = paper.Steps(tmp_path / "steps.json")
-    assert steps.run("train", lambda: calls.append(1) or {"wall_s": 1.0}) == {"wall_s": 1.0}
+    first = steps.run("train", lambda: calls.append(1) or {"wall_s": 1.0})
+    assert first["wall_s"] == 1.0 and first["commit"] == paper.git_commit()
     again = paper.Steps(tmp_path / "steps.json")  # a later call of the command
-    assert again.run("train", lambda: calls.append(2) or {"wall_s": 9.0}) == {"wall_s": 1.0}
+    assert again.run("train", lambda: calls.append(2) or {"wall_s": 9.0}) == first
     assert calls == [1]
-    assert json.loads((tmp_path / "steps.json").read_text()) == {"train": {"wall_s": 1.0}}
+    assert json.loads((tmp_path / "steps.json").read_text()) == {"train": first}
