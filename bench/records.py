@@ -52,7 +52,8 @@ def run_child(command: list[str]) -> dict:
     if child.returncode != 0:
         raise SystemExit(f"bench: '{' '.join(command)}' failed (exit {child.returncode})")
     return {"command": " ".join(command), "wall_s": round(time.perf_counter() - start, 1),
-            "peak_rss_mib": round(usage.ru_maxrss / 2**10, 1)}
+            "peak_rss_mib": round(usage.ru_maxrss / 2**10, 1), "cpu_s": round(usage.ru_utime + usage.ru_stime, 1),
+            "load_after": round(os.getloadavg()[0], 2)}  # cpu_s / wall_s vs the cores: how much else shared them
 
 
 def cpu_model() -> str:

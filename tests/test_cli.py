@@ -74,11 +74,12 @@ def test_train_writes_the_run_directory(short_run):
     rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
     assert len(rows) == 2 * 3 and {r["seed"] for r in rows} == {"0", "1"}
     assert {r["cycle"] for r in rows} == {"1", "2", "3"}
-    assert all(0.0 <= float(r["test_solve_rate"]) <= 1.0 for r in rows)
+    solved = [float(r["test_solve_rate"]) * 10 for r in rows]  # a fraction of the seed's 10 test tasks
+    assert all(n == round(n) and 0 <= n <= 10 for n in solved)
     summary = json.loads((run_dir / "summary.json").read_text())
     assert summary["cycles"] == 3 and summary["seeds"] == [0, 1] and summary["seed_range"] == "0-1"
     final = summary["smooth_reward_final"]
-    assert final["mean_ci"][0] <= final["mean"] <= final["mean_ci"][1] and len(final["per_seed"]) == 2
+    assert len(final["per_seed"]) == 2 and final["mean"] == pytest.approx(sum(final["per_seed"]) / 2, abs=1e-4)
     assert all(len(v) == 3 for v in summary["per_cycle"]["test_solve_rate"].values())
     config = json.loads((run_dir / "config.json").read_text())
     assert config["config_version"] == CONFIG_VERSION and config["num_seeds"] == 2 and config["approach"] == "ours"

@@ -308,7 +308,7 @@ def test_the_cycle_compiles_once_for_every_cycle_and_run(tiny_twice):
     host planner serves every cycle of these tasks (their tables hold every state they meet), and the
     learners keep their seed layout."""
     _, seeds, cycle, runs, compiled = tiny_twice
-    assert compiled[0].compiles >= 1 and compiled[0].compile_s > 0
+    assert compiled[0].compiles >= 1
     assert all(r.compiles == 0 and r.traces == 0 for r in compiled[1:]), [r.compiles for r in compiled]
     assert cycle._tables_only._cache_size() == 1 and cycle._with_host is None  # one dispatch entry
     assert all(x.sharding.is_equivalent_to(seeds.sharding, x.ndim) for x in jax.tree.leaves(runs[-1][0]))

@@ -51,8 +51,7 @@ def test_pure_planning_solves_none(batch):
 
 
 def test_random_bridge_only_takes_applicable_actions(batch):
-    result, rec = run(batch, "random", seed=3, record=True)
-    assert 0.0 <= result.success.mean() <= 1.0
+    _, rec = run(batch, "random", seed=3, record=True)
     decided = rec.decided & rec.live
     call_planner = decided & (rec.skill == batch.env.num_skills)
     assert call_planner.any() and rec.can_plan[call_planner].all()  # CallPlanner only once applicable
