@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from envs_jax.light_switch_door.env import LightSwitchDoor
+from envs_jax.precision import ExactKey
 from jaxbridge.learn.approaches import APPROACHES, get_approach
 from jaxbridge.core.bridges import RandomBridge
 from jaxbridge.core.config import TrainConfig
@@ -130,7 +131,8 @@ def test_no_feature_selection_sees_the_padded_full_state(tests_batch):
     state = tests_batch.env.reset(task)
     full = tests_batch.env.full_state(state)
     assert full.shape == (LightSwitchDoor.full_state_size,)
-    moved = tests_batch.env.full_state(state.replace(robot_x=jnp.float32(3.5), move_key=state.move_key.at[1].set(0.4)))
+    keys = ExactKey.of(state.keys.to_float32().at[1, 0].set(0.4))  # door 1's move key
+    moved = tests_batch.env.full_state(state.replace(robot_x=jnp.float32(3.5), keys=keys))
     changed = np.nonzero(np.asarray(moved != full))[0]
     first_door = 1 + 3 + LightSwitchDoor.max_task_cells
     assert changed.tolist() == [0, first_door + 5 + 1]  # robot x; door 1's move key

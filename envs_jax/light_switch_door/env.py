@@ -2,8 +2,9 @@
 
 A row of cells; the robot starts in cell 0 and must switch on the light in the last cell. The novelty:
 doors. A closed door stops the robot from leaving the door's cell to the right; it opens when both of
-its keys are within 0.1 (inclusive) of their targets, tested as the authors' float64 test would
-(`envs_jax.precision`). The planner's model knows nothing of doors.
+its keys are within 0.1 (inclusive) of their targets. The keys are the authors' float64 sums of float32
+actions, kept exactly (`envs_jax.precision.ExactKey`), so every door opens at the step theirs does; what
+the bridge sees of a key is its nearest float32. The planner's model knows nothing of doors.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import numpy as np
 from flax import struct
 
 from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
-from envs_jax.precision import float32_window
+from envs_jax.precision import ExactKey, ExactWindow, exact_window
 from planner.strips import Domain, LiftedOperator, Problem
 
 MOVE_TARGET, TURN_TARGET, LIGHT_TARGET = 0.5, 0.75, 0.75  # same_levels=True
@@ -103,10 +104,8 @@ class Task:
 
     num_cells: jax.Array  # int32
     door_cell: jax.Array  # int32[D]; -1 marks padding
-    move_target: jax.Array  # float32[D]
-    turn_target: jax.Array  # float32[D]
-    move_window: jax.Array  # float32[D, 2]: the open test's (lo, hi), inclusive (`float32_window`)
-    turn_window: jax.Array  # float32[D, 2]
+    key_target: jax.Array  # float32[D, 2]: each door's (move, turn) targets
+    key_window: ExactWindow  # [D, 2]: the keys within DOOR_TOLERANCE of their targets
     light_target: jax.Array  # float32
 
 
@@ -114,8 +113,7 @@ class Task:
 class State:
     robot_x: jax.Array  # float32, a cell centre i + 0.5
     light_level: jax.Array  # float32
-    move_key: jax.Array  # float32[D]
-    turn_key: jax.Array  # float32[D]
+    keys: ExactKey  # [D, 2]: each door's (move, turn) keys
     task: Task
 
 
@@ -199,13 +197,9 @@ class LightSwitchDoor(NoveltyEnv):
             raise ValueError(f"task {spec} exceeds capacity {self}")
         doors = np.full(self.max_doors, -1, np.int32)
         doors[: len(spec.door_cells)] = spec.door_cells
-        move_target = np.full(self.max_doors, MOVE_TARGET, np.float32)
-        turn_target = np.full(self.max_doors, TURN_TARGET, np.float32)
-        return Task(num_cells=np.int32(spec.num_cells), door_cell=doors,
-                    move_target=move_target, turn_target=turn_target,
-                    move_window=np.stack(float32_window(move_target, DOOR_TOLERANCE, True), -1),
-                    turn_window=np.stack(float32_window(turn_target, DOOR_TOLERANCE, True), -1),
-                    light_target=np.float32(LIGHT_TARGET))
+        key_target = np.tile(np.array([MOVE_TARGET, TURN_TARGET], np.float32), (self.max_doors, 1))
+        return Task(num_cells=np.int32(spec.num_cells), door_cell=doors, key_target=key_target,
+                    key_window=exact_window(key_target, DOOR_TOLERANCE), light_target=np.float32(LIGHT_TARGET))
 
     def planner_problem(self, spec: LightSwitchDoorTask) -> Problem:
         n = spec.num_cells
@@ -242,8 +236,7 @@ class LightSwitchDoor(NoveltyEnv):
     def reset(self, task: Task) -> State:
         doors = task.door_cell.shape
         return State(robot_x=jnp.float32(0.5), light_level=jnp.float32(0.0),
-                     move_key=jnp.zeros(doors, jnp.float32), turn_key=jnp.zeros(doors, jnp.float32),
-                     task=task)
+                     keys=ExactKey.zeros(doors + (2,)), task=task)
 
     def _cell_centres(self) -> jax.Array:
         return jnp.arange(self.max_cells, dtype=jnp.float32) + 0.5
@@ -255,21 +248,18 @@ class LightSwitchDoor(NoveltyEnv):
 
     def door_open(self, state: State) -> jax.Array:
         """bool[D]: both keys within the inclusive tolerance of their targets."""
-        def at(key, window):
-            return (key >= window[:, 0]) & (key <= window[:, 1])
-        return at(state.move_key, state.task.move_window) & at(state.turn_key, state.task.turn_window)
+        return jnp.all(state.task.key_window.contains(state.keys), axis=-1)
 
     def _light_on(self, state: State) -> jax.Array:
         return jnp.abs(state.light_level - state.task.light_target) < LIGHT_ON_TOLERANCE
 
     def step(self, state: State, action: jax.Array) -> State:
         """All rules read the pre-step state (envs.md §2.3)."""
-        dx, dlight, dmove, dturn = action[0], action[1], action[2], action[3]
+        dx, dlight, dkeys = action[0], action[1], action[2:]  # dkeys: (dmove, dturn)
         here = self._doors_here(state)
         closed_here = here & ~self.door_open(state)
         # Doors: keys of a closed door in the robot's cell accumulate and clip; open doors are frozen.
-        move_key = jnp.where(closed_here, jnp.clip(state.move_key + dmove, 0.0, 1.0), state.move_key)
-        turn_key = jnp.where(closed_here, jnp.clip(state.turn_key + dturn, 0.0, 1.0), state.turn_key)
+        keys = state.keys.add_clipped(dkeys, where=closed_here[:, None])
         # Light: only dlight == 0.75 exactly, only in the light's cell, only while off.
         light_x = state.task.num_cells.astype(jnp.float32) - 0.5
         switch = ((jnp.abs(state.robot_x - light_x) < CELL_TOLERANCE) & (dlight == LIGHT_SWITCH_VALUE)
@@ -279,7 +269,7 @@ class LightSwitchDoor(NoveltyEnv):
         blocked = jnp.any(closed_here) & ~(dx < 0)
         moved = jnp.clip(state.robot_x + dx, 0.0, state.task.num_cells.astype(jnp.float32))
         return state.replace(robot_x=jnp.where(blocked, state.robot_x, moved), light_level=light_level,
-                             move_key=move_key, turn_key=turn_key)
+                             keys=keys)
 
     def robot_in_cell(self, state: State) -> jax.Array:
         valid = jnp.arange(self.max_cells) < state.task.num_cells
@@ -293,17 +283,20 @@ class LightSwitchDoor(NoveltyEnv):
         return self._light_on(state)
 
     def state_vector(self, state: State) -> jax.Array:
-        return jnp.concatenate([jnp.stack([state.robot_x, state.light_level]), state.move_key,
-                                state.turn_key])
+        keys = state.keys.to_float32().reshape(-1)
+        return jnp.concatenate([jnp.stack([state.robot_x, state.light_level]), keys])
 
     def features(self, state: State, stuck_state: State) -> jax.Array:
         """envs.md §2.7: the door in the robot's cell (keys and targets) and a flag; zeros if none."""
         here = self._doors_here(state)
         d = jnp.argmax(here)
         has = jnp.any(here)
-        door = jnp.stack([state.move_key[d], state.task.move_target[d], state.turn_key[d],
-                          state.task.turn_target[d]])
+        door = self._keys_and_targets(state)[d]
         return jnp.concatenate([has[None].astype(jnp.float32), jnp.where(has, door, 0.0)])
+
+    def _keys_and_targets(self, state: State) -> jax.Array:
+        """float32[D, 4]: each door's (move_key, move_target, turn_key, turn_target) as observed."""
+        return jnp.stack([state.keys.to_float32(), state.task.key_target], axis=-1).reshape(-1, 4)
 
     @property
     def full_state_fits(self) -> bool:
@@ -324,8 +317,8 @@ class LightSwitchDoor(NoveltyEnv):
         task = state.task
         cell_x = jnp.where(jnp.arange(self.max_cells) < task.num_cells, self._cell_centres(), 0.0)
         has_door = task.door_cell >= 0
-        doors = jnp.stack([task.door_cell.astype(jnp.float32) + 0.5, state.move_key, task.move_target,
-                           state.turn_key, task.turn_target], axis=-1)
+        doors = jnp.concatenate([task.door_cell[:, None].astype(jnp.float32) + 0.5,
+                                 self._keys_and_targets(state)], axis=-1)
         light = jnp.stack([task.num_cells.astype(jnp.float32) - 0.5, state.light_level, task.light_target])
         vector = jnp.concatenate([state.robot_x[None], light, cell_x,
                                   jnp.where(has_door[:, None], doors, 0.0).reshape(-1)])
