@@ -121,7 +121,7 @@ def headline(env: str) -> str:
 
 def authors_row(name: str, theirs: dict) -> str:
     seeds = next(iter(theirs.values()))["seeds_with_logs"]
-    return (f"| {label(name)}, the authors ({seeds} seeds) | " + " | ".join(authors_test_cells(theirs, CYCLES))
+    return (f"| {label(name)}, the authors ({seeds} seed{'' if seeds == '1' else 's'}) | " + " | ".join(authors_test_cells(theirs, CYCLES))
             + f" | {authors_cell(theirs.get(('smooth_reward', '100')))} | |")
 
 
