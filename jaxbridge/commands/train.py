@@ -128,8 +128,8 @@ def new_experiment(flags: dict, approaches: list[str] | None, out: Path, name: s
     except OSError as err:
         raise UsageError(f"cannot write experiment directory {out / (name or env_cls.name)}: {err.strerror}") from None
     from jaxbridge.run.experiments import train_approaches  # after the refusals: it loads orbax (~0.2 s)
-    if is_primary():
-        print(start_line(config, env_cls, approaches), file=sys.stderr, flush=True)
+    if is_primary():  # stdout, as the closing summary: stderr carries progress and the one-line errors
+        print(start_line(config, env_cls, approaches), flush=True)
     return out_dir, _releasing(lock, lambda: train_approaches(config, approaches, out_dir, progress, workers=workers,
                                                               devices=devices, replaced=replaced, grid=hyper_grid,
                                                               **_watch(interrupts, tensorboard)))
