@@ -30,7 +30,7 @@ from pathlib import Path
 from bench.records import ENVS, RECORDS, ROOT, TEST_SEEDS, git_commit, machine, run_child, shown
 from bench.results_blocks import PRESET_RUN
 from jaxbridge.run.comparison import run_labels, write_comparison
-
+from jaxbridge.run.experiments import load_experiment
 
 
 def train_step(experiment: Path, flags: list[str]) -> dict:
@@ -54,10 +54,6 @@ def oracle_rows(env: str, protocols: list[str], seeds: list[int]) -> tuple[list[
             rows.append({"protocol": protocol, "seed": seed.seed, "tasks": seed.tasks,
                          "solve_rate": f"{seed.solve_rate:.4f}"})
     return rows, round(time.perf_counter() - start, 1)
-
-
-def test_protocol(run_dir: Path) -> str:
-    return json.loads((run_dir / "config.json").read_text())["test_protocol"]
 
 
 def results_rows(experiment: Path, renamed: dict[str, str] | None = None) -> list[dict]:
@@ -115,25 +111,26 @@ def main(argv=None) -> int:
     train = steps.run("train", lambda: train_step(main_run, ["--env", env, *seeds]))
     preset = steps.run("train_authors_preset", lambda: train_step(
         preset_run, ["--env", env, "--approaches", "ours", "--preset", "authors", *seeds]))
-    protocols = list(dict.fromkeys([test_protocol(main_run / "ours"), test_protocol(preset_run / "ours")]))
+    (config, approaches, _), (preset_config, _, _) = load_experiment(main_run), load_experiment(preset_run)
+    protocols = list(dict.fromkeys([config.test_protocol, preset_config.test_protocol]))
     oracle = steps.run("oracle", lambda: dict(zip(("rows", "wall_s"), oracle_rows(env, protocols, list(range(first, first + count))))))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(main_run), "--sweep", "novelties"]))
 
     out = args.records / env
     out.mkdir(parents=True, exist_ok=True)
-    for experiment in (main_run, preset_run):  # the tables and figure as this checkout draws them
-        write_comparison(experiment, env, run_labels(json.loads((experiment / "experiment.json").read_text())["approaches"]))
+    # the tables and figure as this checkout draws them
+    write_comparison(main_run, env, run_labels(approaches))
+    write_comparison(preset_run, env, run_labels(["ours"]))
     rows = results_rows(main_run) + results_rows(preset_run, {"ours": PRESET_RUN})
     (out / "results.csv").write_text(csv_text(rows))
     (out / "oracle.csv").write_text(csv_text(oracle["rows"]))
     shutil.copy(main_run / "sweep_novelties.csv", out / "sweep.csv")
     shutil.copy(main_run / "sweep_novelties.png", out / "sweep.png")
     shutil.copy(main_run / "curves.png", out / "figure.png")
-    experiment = json.loads((main_run / "experiment.json").read_text())
     record = {"env": env, "commit": git_commit(), "command": f"python -m bench.paper --env {env}" + "".join(
                   f" --{flag} {value}" for flag, value, default in (("num-seeds", count, TEST_SEEDS[1]), ("cycles", args.cycles, 100))
                   if value != default),
-              "seeds": f"{first}-{first + count - 1}", "approaches": experiment["approaches"],
+              "seeds": f"{first}-{first + count - 1}", "approaches": approaches,
               "config_version": json.loads((main_run / "ours" / "config.json").read_text())["config_version"],
               "test_protocols": {"main": protocols[0], "authors_preset": protocols[-1]},
               "steps": {"train": train, "train_authors_preset": preset,

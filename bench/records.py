@@ -48,9 +48,9 @@ def run_child(command: list[str]) -> dict:
     start = time.perf_counter()
     child = subprocess.Popen([sys.executable, *command[1:]], cwd=ROOT)  # command[0] is "python", as shown
     _, status, usage = os.wait4(child.pid, 0)  # the child's own resource usage, not all children's
-    child.returncode = os.waitstatus_to_exitcode(status)
-    if child.returncode != 0:
-        raise SystemExit(f"bench: '{' '.join(command)}' failed (exit {child.returncode})")
+    code = os.waitstatus_to_exitcode(status)
+    if code != 0:
+        raise SystemExit(f"bench: '{' '.join(command)}' failed (exit {code})")
     return {"command": " ".join(command), "wall_s": round(time.perf_counter() - start, 1),
             "peak_rss_mib": round(usage.ru_maxrss / 2**10, 1), "cpu_s": round(usage.ru_utime + usage.ru_stime, 1),
             "load_after": round(os.getloadavg()[0], 2)}  # cpu_s / wall_s vs the cores: how much else shared them
