@@ -16,6 +16,17 @@ from jaxbridge.learn.online import episode_params
 from jaxbridge.learn.q_bridge import encode
 
 
+def greedy_test_rollout(setup, learners, num_seeds: int, num_tests: int):
+    """Every seed's greedy bridge on its test tasks, recorded: (EpisodeResult, StepRecord [T, episodes]);
+    episode i is seed i // num_tests's task i % num_tests."""
+    owner = np.repeat(np.arange(num_seeds), num_tests)
+    greedy = episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
+    keys = jax.random.split(jax.random.key(123), len(owner))
+    env = setup.test_env
+    return rollout(env, setup.bridge(env), greedy, setup.test.arrays, keys, setup.test.max_steps, record=True,
+                   controls=setup.controls)
+
+
 def main() -> None:
     parser = sweep_parser(__doc__, "coffee", 8, 0, 40)
     parser.add_argument("--max-failed", type=int, default=3, help="failed tasks printed per seed")
@@ -26,11 +37,7 @@ def main() -> None:
     print_digits(config.seeds, rates)
 
     test, env, net = setup.test, setup.test_env, setup.dqn.net
-    owner = np.repeat(np.arange(config.num_seeds), config.num_test_tasks)
-    greedy = episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
-    keys = jax.random.split(jax.random.key(123), len(owner))
-    result, records = rollout(env, setup.bridge(env), greedy, test.arrays, keys,
-                              test.max_steps, record=True, controls=setup.controls)
+    result, records = greedy_test_rollout(setup, learners, config.num_seeds, config.num_test_tasks)
     names = env.skill_names + ("CallPlanner",)
     success = np.asarray(result.success)
     decided = np.asarray(records.decided & records.live)

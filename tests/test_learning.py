@@ -89,6 +89,42 @@ def test_bootstrapped_values_are_clipped_to_the_achievable_range_only_when_asked
         assert y[0] == pytest.approx(expected) and y[1] == 1.5  # terminal rewards are never clipped
 
 
+def test_a_step_discount_discounts_each_target_by_the_steps_its_transition_spans():
+    """With step_gamma the goal's reward and the bootstrapped value of a transition of k env steps are
+    step_gamma^k of what they are without it (a target net saying Q = 5 everywhere)."""
+    net = QNetwork()
+    params = net.init(jax.random.key(0), jnp.zeros((1, input_size(ENV, ENV.num_features))))
+    out = params["params"]["UniformDense_2"]
+    five = {"params": {**params["params"], "UniformDense_2": {"kernel": out["kernel"], "bias": out["bias"] + 5.0}}}
+    f = jnp.zeros((3, ENV.num_features))
+    batch = Transition(features=f, skill=jnp.array([0, 0, 5]), param=jnp.zeros(3), reward=jnp.array([0.0, 0.0, 1.0]),
+                       done=jnp.array([False, False, True]), next_features=f,
+                       next_num_ground=jnp.ones((3, ENV.num_skills + 1), jnp.int32), steps=jnp.array([1, 4, 30]))
+    y = np.asarray(td_targets(make_dqn(TrainConfig(step_gamma=0.9), ENV, ENV.num_features), five, five, batch,
+                              jax.random.key(1)))
+    np.testing.assert_allclose(y, [0.8 * 5.0 * 0.9, 0.8 * 5.0 * 0.9 ** 4, 0.9 ** 30], rtol=1e-5)
+    plain = np.asarray(td_targets(make_dqn(TrainConfig(), ENV, ENV.num_features), five, five,
+                                  batch.replace(steps=None), jax.random.key(1)))
+    np.testing.assert_allclose(plain, [4.0, 4.0, 1.0], rtol=1e-6)
+
+
+def test_transitions_count_the_env_steps_from_their_decision_to_the_next():
+    """Coffee's oracle: MoveToTwistJug, TwistJug to rot 0 (two wrist steps, then one up) and CallPlanner,
+    which runs the plan to the goal; the three spans add up to the episode after the first decision."""
+    from envs_jax.coffee.env import Coffee
+    batch = evaluation_batch(Coffee, [0], 1, protocol="jaxbridge")
+    result, rec = rollout(batch.env, make_bridge("oracle", batch.env), None, batch.arrays,
+                          jax.random.split(jax.random.key(0), 1), batch.max_steps, record=True)
+    records = jax.tree.map(lambda x: x[:, 0], rec)
+    transitions, valid = episode_transitions(records, result.success[0], batch.env.num_skills, 0.0, True)
+    t = np.flatnonzero(np.asarray(valid))
+    steps = np.asarray(transitions.steps)[t]
+    assert bool(result.success[0]) and np.asarray(transitions.skill)[t].tolist() == [0, 1, batch.env.num_skills]
+    assert steps[1] == 3 and steps[0] >= 1
+    assert steps.sum() == int(result.steps[0]) - t[0]
+    assert episode_transitions(records, result.success[0], batch.env.num_skills)[0].steps is None
+
+
 def test_an_ensemble_is_the_minimum_of_independent_members_all_fitted_to_the_targets():
     x = jax.random.normal(jax.random.key(0), (64, input_size(ENV, ENV.num_features)))
     single = QNetwork((32, 32)).init(jax.random.key(1), x)

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 # which their defaults are); 5: `output_init` (older runs started their output layer at zero); 6:
 # `env_quirks`, `normalise`, `fit_patience`, `param_samples` (older runs had none of them: their defaults);
 # 7: `loop_guard` (older runs had none); 8: `low_level_budget` (older runs had no low-level baselines);
-# 9: `feature_noise` (older runs had none)
-CONFIG_VERSION = 9
+# 9: `feature_noise` (older runs had none); 10: `step_gamma` (older runs had none)
+CONFIG_VERSION = 10
 
 
 # The numeric hyperparameters that change no shape or program: pytree leaves of the cycle
@@ -28,7 +28,7 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
           "epsilon_end": (0, 1, True), "epsilon_decay": (0, None, True), "num_seeds": (1, None, True),
           "cycles": (1, None, True), "episodes_per_cycle": (1, None, True), "train_steps": (1, None, True),
           "num_test_tasks": (1, None, True), "updates_per_cycle": (0, None, True), "fit_patience": (0, None, True),
-          "batch_size": (1, None, True), "low_level_budget": (1, None, True), "feature_noise": (0, None, True),
+          "batch_size": (1, None, True), "low_level_budget": (1, None, True), "feature_noise": (0, None, True), "step_gamma": (0, 1, False),
           "q_ensemble": (1, None, True), "n_sample": (1, None, True), "n_target_sample": (1, None, True),
           "buffer_capacity": (1, None, True), "checkpoint_every": (1, None, True), "seed_block": (1, None, True),
           "first_seed": (0, None, True)}
@@ -134,6 +134,10 @@ class TrainConfig:
     """Replay transitions kept per seed (FIFO); the paper's runs stored about 10k."""
     call_planner_bonus: float = 0.0
     """Extra reward when CallPlanner's transition reaches the goal (the authors' code: 0.5; off by default)."""
+    step_gamma: float = 1.0
+    """A further discount per env step of every transition (the options framework's semi-MDP discount,
+    gamma^decisions x step_gamma^steps): with 1, the paper's, a fix of the novelty is worth the same
+    whatever its number of steps. Below 1 the buffer keeps each transition's step count."""
     clip_bootstrap: bool = False
     """Clip the bootstrapped next-state value of every TD target to [0, 1 + call_planner_bonus], the range
     every true Q lies in (rewards are 0, or that much at the goal). Stops the max over sampled parameters
@@ -188,7 +192,7 @@ class TrainConfig:
             data.setdefault("approach", "ours")
         if version in (1, 2):
             data.setdefault("split_task_state", False)
-        elif version not in (3, 4, 5, 6, 7, 8, CONFIG_VERSION):
+        elif version not in (3, 4, 5, 6, 7, 8, 9, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         if version < 7:  # runs before version 7 had no loop guard
             data.setdefault("loop_guard", False)

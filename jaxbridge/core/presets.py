@@ -24,6 +24,7 @@ AUTHORS = {
     "q_ensemble": 1,  # one network
     "loop_guard": False,  # a skill may be chosen again in the state it left unchanged
     "feature_noise": 0.0,  # each minibatch fits the stored features exactly
+    "step_gamma": 1.0,  # one discount per bridge decision, whatever its number of env steps
     "activation": "relu",  # plain ReLU hidden units
     "output_init": "uniform",  # PyTorch's default init of the output layer too
     "target_init": "apart",  # the target initialised apart from the online network

@@ -115,7 +115,8 @@ def empty_transition(dqn: DQN) -> Transition:
     return for_buffer(Transition(features=f, skill=jnp.int32(0), param=jnp.float32(0), reward=jnp.float32(0),
                                  done=jnp.bool_(True), next_features=f,
                                  next_num_ground=jnp.zeros(dqn.env.num_skills + 1, jnp.int32),
-                                 task=None if dqn.split is None else jnp.int32(0)))
+                                 task=None if dqn.split is None else jnp.int32(0),
+                                 steps=jnp.int32(0) if dqn.config.step_gamma < 1 else None))
 
 
 def init_learner(dqn: DQN, key: jax.Array) -> Learner:
@@ -153,6 +154,9 @@ def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key
                                                   at_task(task, batch.task)))
     if config.clip_bootstrap:
         next_q = jnp.clip(next_q, 0.0, 1.0 + hyper.call_planner_bonus)
+    if batch.steps is not None:  # semi-MDP: what follows the transition comes step_gamma^steps later
+        late = config.step_gamma ** batch.steps.astype(jnp.float32)
+        return batch.reward * late + jnp.where(batch.done, 0.0, hyper.gamma * late * next_q)
     # gamma inside the select: a traced gamma's product next to the sum is fused into a multiply-add,
     # a constant's is not (docs/DESIGN.md, "Hyperparameters as leaves"); this way both round it first.
     return batch.reward + jnp.where(batch.done, 0.0, hyper.gamma * next_q)

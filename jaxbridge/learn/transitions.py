@@ -25,10 +25,12 @@ class Transition:
     next_features: jax.Array  # float32[F]
     next_num_ground: jax.Array  # int32[num_skills + 1]: applicable actions at the next decision
     task: jax.Array | None = None  # int32: its training task's row of the task-constant values (with a split)
+    steps: jax.Array | None = None  # int32: env steps it spans (with a step discount)
 
 
 def episode_transitions(records: StepRecord, success: jax.Array, call_planner_skill: int,
-                        call_planner_bonus: float = 0.0) -> tuple[Transition, jax.Array]:
+                        call_planner_bonus: float = 0.0, count_steps: bool = False
+                        ) -> tuple[Transition, jax.Array]:
     """Transitions of one episode (records over time, [T]); returns (Transition[T], valid[T])."""
     steps = records.decided.shape[0]
     decided = records.decided & records.live
@@ -41,10 +43,14 @@ def episode_transitions(records: StepRecord, success: jax.Array, call_planner_sk
     nxt = jnp.minimum(next_decision, steps - 1)
     goal = ~has_next & success  # the episode ended at the goal during this transition
     bonus = jnp.where(records.skill == call_planner_skill, call_planner_bonus, 0.0)
+    # The env steps from each decision to the next one (or to the episode's end).
+    live_before = jnp.concatenate([jnp.zeros(1, jnp.int32), jnp.cumsum(records.live.astype(jnp.int32))])
+    span = live_before[next_decision] - live_before[index]
     transition = Transition(
         features=records.features, skill=records.skill, param=records.param,
         reward=jnp.where(goal, 1.0 + bonus, 0.0).astype(jnp.float32), done=~has_next,
-        next_features=records.features[nxt], next_num_ground=records.num_ground[nxt])
+        next_features=records.features[nxt], next_num_ground=records.num_ground[nxt],
+        steps=span if count_steps else None)
     return transition, decided
 
 
