@@ -42,10 +42,13 @@ def metrics_csv(history: list, seeds: list[int]) -> str:
 
 def curve_statistics(test_rates: np.ndarray, train_rates: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
     """Per cycle, over seeds ([seeds, cycles] in): mean and IQM with 95% bootstrap intervals, min and max
-    (utils/stats.describe) of the test solve rate and of the test and training smooth rewards."""
+    (utils/stats.describe) of the test solve rate and of the test and training smooth rewards, and the
+    test solve rate's fall below its best before (utils/stats.describe_drop: does it keep what it
+    learned?)."""
     series = {"test_solve_rate": test_rates, "test_smooth_reward": smooth(test_rates),
               "train_smooth_reward": smooth(train_rates)}
-    return {name: stats.describe(values) for name, values in series.items()}
+    return {**{name: stats.describe(values) for name, values in series.items()},
+            "test_drop": stats.describe_drop(test_rates)}
 
 
 def at_cycle(described: dict[str, np.ndarray], cycle: int) -> dict:
@@ -63,7 +66,8 @@ def report_cells(curves: dict[str, dict[str, np.ndarray]], cycles: int) -> dict:
     rate at the report cycles reached, the test and training smooth rewards at the last cycle."""
     return {"test_solve_rate_at": {str(c): at_cycle(curves["test_solve_rate"], c) for c in REPORT_CYCLES if c <= cycles},
             "smooth_reward_final": at_cycle(curves["test_smooth_reward"], cycles),
-            "train_smooth_reward_final": at_cycle(curves["train_smooth_reward"], cycles)}
+            "train_smooth_reward_final": at_cycle(curves["train_smooth_reward"], cycles),
+            "test_drop_final": at_cycle(curves["test_drop"], cycles)}
 
 
 def summary(history: list, seeds: list[int], elapsed_s: float, devices: str | None = None) -> dict:

@@ -65,18 +65,21 @@ def results_markdown(env: str, rows: list[dict]) -> str:
     for statistic, title in (("mean", "Mean"), ("iqm", "Interquartile mean (IQM)")):
         lines += [f"## {title} [95% bootstrap CI]", "",
                   "| approach | seeds | " + " | ".join(f"cycle {c}" for c in REPORT_CYCLES) +
-                  f" | smooth reward at cycle {last} (test) | (training) |",
-                  "|---|---|" + "---|" * (len(REPORT_CYCLES) + 2)]
+                  f" | smooth reward at cycle {last} (test) | (training) | cycle {last} minus the best before |",
+                  "|---|---|" + "---|" * (len(REPORT_CYCLES) + 3)]
         for r in rows:
             cells = report_cells(r["curves"], r["cycles"])
             at = [stats.cell_text(cells["test_solve_rate_at"][str(c)], statistic) if c <= r["cycles"] else ""
                   for c in REPORT_CYCLES]
             lines.append(f"| {r['label']} | {len(r['seeds'])} | " + " | ".join(at) + f" | "
                          f"{stats.cell_text(cells['smooth_reward_final'], statistic)} | "
-                         f"{stats.cell_text(cells['train_smooth_reward_final'], statistic)} |")
+                         f"{stats.cell_text(cells['train_smooth_reward_final'], statistic)} | "
+                         f"{stats.cell_text(cells['test_drop_final'], statistic, signed=True)} |")
         lines.append("")
     lines += [f"Statistics {STATISTICS_NOTE}; every cycle's values are in results.csv. Smooth reward at cycle c: "
-              "the sum of the solve rates of cycles c-25 .. c-1, divided by 25 (reference/results.md)."]
+              "the sum of the solve rates of cycles c-25 .. c-1, divided by 25 (reference/results.md). The last column: "
+              "the statistic at the last cycle minus its highest value at any cycle before (0 or above: the approach "
+              "keeps what it learned; below 0: it lost that much), with the interval of that difference."]
     return "\n".join(lines) + "\n"
 
 

@@ -58,15 +58,40 @@ def describe(scores: np.ndarray, reps: int = REPS) -> dict[str, np.ndarray]:
     return out
 
 
-def ci_text(value: float, interval) -> str:
-    """"0.85 [0.70, 0.95]": a statistic and its interval (the value alone where the interval is one point)."""
+def drop_from_best(curve: np.ndarray) -> np.ndarray:
+    """curve[..., c] minus the highest of curve[..., :c] (0 at the first cycle): how far a curve stands
+    below its best so far (negative), or above it (positive)."""
+    best_before = np.maximum.accumulate(curve, axis=-1)
+    return curve - np.concatenate([curve[..., :1], best_before[..., :-1]], axis=-1)
+
+
+def describe_drop(scores: np.ndarray, reps: int = REPS) -> dict[str, np.ndarray]:
+    """`describe`'s keys for the fall below the best so far, per cycle (scores [runs, cycles]): for mean
+    and IQM, the statistic's curve at cycle c minus its highest value before c, with the bootstrap
+    interval of that difference (each replicate resamples the seeds once for every cycle); min and max:
+    the seeds' own falls (each seed's rate minus its best before)."""
+    scores = np.asarray(scores, np.float64)
+    out = {}
+    for name, statistic in STATISTICS.items():
+        fall = lambda runs, axis, statistic=statistic: drop_from_best(statistic(runs, axis))
+        out[name] = fall(scores, 0)
+        out[f"{name}_low"], out[f"{name}_high"] = bootstrap_ci(scores, fall, reps)
+    per_seed = drop_from_best(scores)
+    out["min"], out["max"] = per_seed.min(0), per_seed.max(0)
+    return out
+
+
+def ci_text(value: float, interval, signed: bool = False) -> str:
+    """"0.85 [0.70, 0.95]": a statistic and its interval (the value alone where the interval is one point);
+    `signed`: every number with its sign ("+0.00 [-0.03, +0.02]", for differences)."""
     low, high = interval
-    return f"{value:.2f}" if low == high else f"{value:.2f} [{low:.2f}, {high:.2f}]"
+    f = "{:+.2f}" if signed else "{:.2f}"
+    return f.format(value) if low == high else f"{f.format(value)} [{f.format(low)}, {f.format(high)}]"
 
 
-def cell_text(cell: dict, statistic: str = "mean") -> str:
+def cell_text(cell: dict, statistic: str = "mean", signed: bool = False) -> str:
     """A table cell ({statistic: value, f"{statistic}_ci": [low, high], ...}) as ci_text."""
-    return ci_text(cell[statistic], cell[f"{statistic}_ci"])
+    return ci_text(cell[statistic], cell[f"{statistic}_ci"], signed)
 
 
 def seed_range(seeds: list[int]) -> str:
