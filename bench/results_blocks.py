@@ -54,17 +54,22 @@ def authors_rows(env: str) -> dict[str, dict[tuple[str, str], dict]]:
 
 # ---------------------------------------------------------------- cells
 
-def interval(value: float, low: float, high: float) -> str:
-    """"0.85 [0.70, 0.95]", or the value alone where the interval rounds to one point."""
-    return f"{value:.2f}" if f"{low:.2f}" == f"{high:.2f}" else f"{value:.2f} [{low:.2f}, {high:.2f}]"
+def interval(value: float, low: float, high: float, signed: bool = False) -> str:
+    """"0.85 [0.70, 0.95]", or the value alone where the interval rounds to one point (stats.ci_text)."""
+    return stats.ci_text(value, (low, high), signed)
 
 
-def stat_cell(row: dict, name: str) -> str:
+def stat_cell(row: dict, name: str, signed: bool = False) -> str:
     """Mean [95% CI] and, beside it, IQM [95% CI] of curve `name` in a results.csv row."""
     f = lambda s: float(row[f"{name}_{s}"])
-    mean = interval(f("mean"), f("mean_low"), f("mean_high"))
-    iqm = interval(f("iqm"), f("iqm_low"), f("iqm_high"))
+    mean = interval(f("mean"), f("mean_low"), f("mean_high"), signed)
+    iqm = interval(f("iqm"), f("iqm_low"), f("iqm_high"), signed)
     return f"{mean}<br>IQM {iqm}"
+
+
+def drop_cell(row: dict) -> str:
+    """The last cycle's statistic minus its best before, where the record has it."""
+    return stat_cell(row, "test_drop", signed=True) if "test_drop_mean" in row else ""
 
 
 def mean_ci(values: list[float]) -> str:
@@ -106,13 +111,15 @@ def headline(env: str) -> str:
     lines = [f"Test seeds {run['seeds']}, {int(record['results'][0]['seeds'])} seeds x {last} cycles; each cell: "
              "mean [95% CI] over seeds, IQM [95% CI] beside it; the authors' rows: their mean [lowest, highest "
              "seed] (docs/results/authors.csv).", "",
-             "| approach | cycle " + " | cycle ".join(map(str, CYCLES)) + f" | smooth reward at {last} (test) | (training) |",
-             "|---|" + "---|" * (len(CYCLES) + 2)]
+             "| approach | cycle " + " | cycle ".join(map(str, CYCLES)) + f" | smooth reward at {last} (test) | (training) "
+             f"| cycle {last} minus the best before |",
+             "|---|" + "---|" * (len(CYCLES) + 3)]
     authors = authors_rows(env)
     for name, cycles in by_run.items():
         lines.append(f"| **{label(name)}** | " + " | ".join(
             stat_cell(cycles[c], "test_solve_rate") if c in cycles else "" for c in CYCLES)
-            + f" | {stat_cell(cycles[last], 'test_smooth_reward')} | {stat_cell(cycles[last], 'train_smooth_reward')} |")
+            + f" | {stat_cell(cycles[last], 'test_smooth_reward')} | {stat_cell(cycles[last], 'train_smooth_reward')} "
+            f"| {drop_cell(cycles[last])} |")
         if name in authors and name != PRESET_RUN:
             lines.append(authors_row(name, authors[name]))
     lines += ceiling_rows(record) + ["", provenance(run), "", f"![{ENV_TITLES[env]}, test seeds](results/{env}/figure.png)"]
@@ -122,7 +129,7 @@ def headline(env: str) -> str:
 def authors_row(name: str, theirs: dict) -> str:
     seeds = next(iter(theirs.values()))["seeds_with_logs"]
     return (f"| {label(name)}, the authors ({seeds} seed{'' if seeds == '1' else 's'}) | " + " | ".join(authors_test_cells(theirs, CYCLES))
-            + f" | {authors_cell(theirs.get(('smooth_reward', '100')))} | |")
+            + f" | {authors_cell(theirs.get(('smooth_reward', '100')))} | | |")
 
 
 def ceiling_rows(record: dict) -> list[str]:
@@ -133,7 +140,7 @@ def ceiling_rows(record: dict) -> list[str]:
         cell = ceiling(record, protocol)
         rows.append(f"| the oracle's ceiling ({protocol} test tasks: "
                     + " and ".join("the runs above" if k == "main" else "the preset's" for k in which) + ") | "
-                    + " | ".join([cell] * len(CYCLES)) + f" | {cell} | |")
+                    + " | ".join([cell] * len(CYCLES)) + f" | {cell} | | |")
     return rows
 
 

@@ -82,11 +82,11 @@ def describe_drop(scores: np.ndarray, reps: int = REPS) -> dict[str, np.ndarray]
 
 
 def ci_text(value: float, interval, signed: bool = False) -> str:
-    """"0.85 [0.70, 0.95]": a statistic and its interval (the value alone where the interval is one point);
-    `signed`: every number with its sign ("+0.00 [-0.03, +0.02]", for differences)."""
-    low, high = interval
-    f = "{:+.2f}" if signed else "{:.2f}"
-    return f.format(value) if low == high else f"{f.format(value)} [{f.format(low)}, {f.format(high)}]"
+    """"0.85 [0.70, 0.95]": a statistic and its interval (the value alone where the interval rounds to one
+    point); `signed`: every number with its sign ("-0.02 [-0.05, +0.01]", for differences)."""
+    f = ("{:+.2f}" if signed else "{:.2f}").format
+    point, low, high = f(value), f(interval[0]), f(interval[1])
+    return point if low == high else f"{point} [{low}, {high}]"
 
 
 def cell_text(cell: dict, statistic: str = "mean", signed: bool = False) -> str:
