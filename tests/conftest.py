@@ -4,13 +4,14 @@ from pathlib import Path
 
 import pytest
 
+from run_helpers import TEST_XLA_FLAGS
+
 # Tests share compiled programs across processes through JAX's persistent cache, the many small ones too
 # (a child train.py finds an earlier one's programs of the same shapes; faster reruns).
 os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", os.path.join(os.path.dirname(__file__), "..", ".jax_cache"))
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 # Tests check behaviour, not speed: XLA's cheaper code generation cuts the suite's compile time, most
 # of its time (~30% of the whole, docs/PERFORMANCE.md). Set before JAX starts; child processes inherit it.
-TEST_XLA_FLAGS = "--xla_backend_optimization_level=0 --xla_llvm_disable_expensive_passes=true"
 os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {TEST_XLA_FLAGS}".strip()
 
 

@@ -4,6 +4,8 @@ import sys
 import time
 from pathlib import Path
 
+# XLA's cheaper code generation, which the suite compiles with (conftest.py says why).
+TEST_XLA_FLAGS = "--xla_backend_optimization_level=0 --xla_llvm_disable_expensive_passes=true"
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ["--approaches", "pure_planning", "--num-seeds", "1", "--no-progress"]
 

@@ -63,3 +63,22 @@ def test_seed_ranges_in_words():
     assert stats.seed_range([7, 0, 1, 2, 3]) == "0-3, 7"
     assert stats.seed_range([5]) == "5"
 
+
+
+def test_the_drop_is_each_cycle_minus_the_best_before_for_the_statistic_and_for_each_seed():
+    """Two seeds: one learns at cycle 2 and loses half of it at 3, the other learns at 3. The mean curve
+    0, 0.5, 0.75 never falls; seed 0 falls by 0.5 at cycle 3, which min reports."""
+    scores = np.array([[0.0, 1.0, 0.5], [0.0, 0.0, 1.0]])
+    drop = stats.describe_drop(scores, reps=500)
+    np.testing.assert_allclose(drop["mean"], [0.0, 0.5, 0.25])
+    np.testing.assert_allclose(drop["min"], [0.0, 0.0, -0.5])
+    np.testing.assert_allclose(drop["max"], [0.0, 1.0, 1.0])
+    # resampling both seeds from seed 0 alone gives its own fall, -0.5: the interval reaches it
+    assert drop["mean_low"][2] == pytest.approx(-0.5) and drop["mean_high"][2] >= 0.25
+    np.testing.assert_allclose(stats.drop_from_best(np.array([0.2, 0.9, 0.4, 1.0, 0.8])), [0.0, 0.7, -0.5, 0.1, -0.2])
+
+
+def test_ci_text_shows_signs_for_differences_and_one_value_where_the_interval_rounds_to_it():
+    assert stats.ci_text(-0.0123, (-0.04, 0.001), signed=True) == "-0.01 [-0.04, +0.00]"
+    assert stats.ci_text(0.5, (0.4991, 0.5004)) == "0.50"
+    assert stats.ci_text(0.85, (0.7, 0.95)) == "0.85 [0.70, 0.95]"
