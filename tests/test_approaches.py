@@ -157,7 +157,6 @@ def test_random_and_pure_planning_leave_the_network_untouched():
         assert all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(learners.params),
                                                         jax.tree.leaves(after.params)))
         assert float(metrics.loss[0]) == 0.0 and int(metrics.buffer_size[0]) == 0
-        assert float(metrics.epsilon[0]) == (1.0 if name == "random" else 0.0)
 
 
 def test_env_defaults_sit_between_the_paper_defaults_and_explicit_overrides():
