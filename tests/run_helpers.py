@@ -30,6 +30,14 @@ def snapshot(directory: Path) -> dict:
     return {str(p.relative_to(directory)): p.read_bytes() for p in sorted(directory.rglob("*")) if p.is_file()}
 
 
+def start_held(hold_after: int, signals: Path, *args, **popen) -> subprocess.Popen:
+    """train.py that waits after sealing checkpoint `hold_after` (tests/held_train.py): `signals`/held
+    appears then, and it goes on once the test writes `signals`/release."""
+    signals.mkdir(parents=True, exist_ok=True)
+    return subprocess.Popen([sys.executable, str(ROOT / "tests" / "held_train.py"), str(hold_after), str(signals), *args],
+                            cwd=ROOT, **{"stdout": subprocess.PIPE, "stderr": subprocess.PIPE, "text": True, **popen})
+
+
 def wait_for(path: Path, proc: subprocess.Popen, seconds: float = 300) -> None:
     deadline = time.time() + seconds
     while not path.exists():

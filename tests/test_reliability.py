@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import threading
-import time
 from pathlib import Path
 
 import jax
@@ -21,6 +20,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import rundir
 from jaxbridge.run.runner import NumericalFault, train
+from run_helpers import start_held, wait_for
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ["--num-seeds", "2", "--cycles", "6", "--updates-per-cycle", "50", "--checkpoint-every", "1", "--no-progress",
@@ -47,12 +47,11 @@ def uninterrupted(tmp_path_factory):
 
 def test_a_run_killed_mid_training_resumes_to_identical_metrics_and_parameters(uninterrupted, tmp_path):
     run_dir = tmp_path / "killed" / "ours"
-    proc = subprocess.Popen([sys.executable, "train.py", *SMALL, "--out", str(tmp_path), "--name", "killed"],
-                            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.time() + 300
-    while not (run_dir / "checkpoints" / "3.sha256.json").exists():
-        assert proc.poll() is None and time.time() < deadline, "the run ended before it could be killed"
-        time.sleep(0.05)
+    # held right after checkpoint 3, so the kill lands there however fast the machine
+    proc = start_held(3, tmp_path / "signals", *SMALL, "--out", str(tmp_path), "--name", "killed",
+                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wait_for(tmp_path / "signals" / "held", proc)
+    assert checkpoint.sealed_steps(run_dir / "checkpoints")[-1] == 3
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
     resumed = cli("train.py", "--resume", str(run_dir.parent), "--no-progress")  # the experiment directory

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from run_helpers import QUICK, ROOT, one_line_error, snapshot, start, train, wait_for
+from run_helpers import QUICK, ROOT, one_line_error, snapshot, start_held, train, wait_for
 
 from jaxbridge.run import rundir
 
@@ -51,16 +51,18 @@ def test_overwrite_replaces_only_runs_and_names_stay_inside_out(finished, tmp_pa
 
 
 def test_a_locked_run_directory_is_refused_to_a_second_process(tmp_path):
-    run = tmp_path / "c"
-    first = start("--approaches", "pure_planning", "--num-seeds", "2", "--cycles", "60", "--no-progress",
-                  "--out", str(tmp_path), "--name", "c")
+    run, signals = tmp_path / "c", tmp_path / "signals"
+    # held after its first checkpoint, so it still holds the lock while the others try
+    first = start_held(1, signals, "--approaches", "pure_planning", "--num-seeds", "2", "--cycles", "2",
+                       "--checkpoint-every", "1", "--no-progress", "--out", str(tmp_path), "--name", "c")
     try:
-        wait_for(run / ".lock", first)
+        wait_for(signals / "held", first)
         holder = json.loads((run / ".lock").read_text())
         assert holder["pid"] == first.pid
         for proc in (train(*QUICK, "--cycles", "1", "--out", str(tmp_path), "--name", "c", "--overwrite"),
                      train("--resume", str(run), "--no-progress")):
             one_line_error(proc, 2, f"is in use by process {first.pid}", "wait for it to finish")
+        (signals / "release").touch()
         out, err = first.communicate(timeout=300)
     finally:
         first.kill()

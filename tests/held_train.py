@@ -1,0 +1,35 @@
+"""train.py that stops right after sealing checkpoint N, writes DIR/held and waits until DIR/release
+exists: a test can then kill it, or run a second process against its locked directory, at a known
+step, whatever the machine's speed.
+
+    python tests/held_train.py N DIR TRAIN_ARGS...
+"""
+import runpy
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def main() -> None:
+    hold_after, signals, args = int(sys.argv[1]), Path(sys.argv[2]), sys.argv[3:]
+    sys.path.insert(0, str(ROOT))
+    from jaxbridge.run import checkpoint
+
+    save = checkpoint.save
+
+    def save_then_hold(directory, step, state, record):
+        save(directory, step, state, record)
+        if step == hold_after:
+            (signals / "held").write_text(str(step))
+            while not (signals / "release").exists():  # released by the test, or killed here
+                time.sleep(0.05)
+
+    checkpoint.save = save_then_hold
+    sys.argv = [str(ROOT / "train.py"), *args]
+    runpy.run_path(str(ROOT / "train.py"), run_name="__main__")
+
+
+if __name__ == "__main__":
+    main()
