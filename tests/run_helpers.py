@@ -38,6 +38,20 @@ def start_held(hold_after: int, signals: Path, *args, **popen) -> subprocess.Pop
                             cwd=ROOT, **{"stdout": subprocess.PIPE, "stderr": subprocess.PIPE, "text": True, **popen})
 
 
+def wait_for_line(proc: subprocess.Popen, text: str, seconds: float = 120) -> None:
+    """Read the process's stderr pipe (its bytes, past any buffering) until `text` appears; fail if it
+    ends or `seconds` pass first. Whatever follows stays for `proc.communicate()`."""
+    import os
+    import select
+    fd, seen, deadline = proc.stderr.fileno(), b"", time.time() + seconds
+    while text.encode() not in seen:
+        left = deadline - time.time()
+        ready = left > 0 and select.select([fd], [], [], left)[0]
+        chunk = os.read(fd, 1 << 16) if ready else b""
+        assert chunk, f"the process ended or went quiet before saying {text!r}: {seen.decode()!r}"
+        seen += chunk
+
+
 def wait_for(path: Path, proc: subprocess.Popen, seconds: float = 300) -> None:
     deadline = time.time() + seconds
     while not path.exists():

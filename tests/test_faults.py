@@ -5,10 +5,9 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
-from run_helpers import QUICK, one_line_error, start, train, wait_for
+from run_helpers import QUICK, one_line_error, start, start_held, train, wait_for, wait_for_line
 
 from jaxbridge.run import checkpoint
 
@@ -23,15 +22,19 @@ def test_ctrl_c_during_start_up_exits_at_once_saying_nothing_was_trained(tmp_pat
 
 
 def test_three_ctrl_c_exit_130_without_corrupting_anything(tmp_path):
-    run = tmp_path / "t" / "pure_planning"
-    proc = start("--approaches", "pure_planning", "--num-seeds", "2", "--cycles", "1000", "--checkpoint-every", "1",
-                 "--no-progress", "--out", str(tmp_path), "--name", "t")
-    wait_for(run / "checkpoints" / "2.sha256.json", proc)
-    for _ in range(3):
+    run, signals = tmp_path / "t" / "pure_planning", tmp_path / "signals"
+    # held after checkpoint 2, mid-run: it cannot finish between the presses, and each press waits for
+    # the previous one's answer (signals sent at once could merge into one)
+    proc = start_held(2, signals, "--approaches", "pure_planning", "--num-seeds", "2", "--cycles", "4",
+                      "--checkpoint-every", "1", "--no-progress", "--out", str(tmp_path), "--name", "t")
+    wait_for(signals / "held", proc)
+    for answer in ("stopping after the current cycle", "still finishing the checkpoint"):
         proc.send_signal(signal.SIGINT)
-        time.sleep(0.05)
+        wait_for_line(proc, answer)
+    proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "Traceback" not in err and "terminate" not in err, err
+    assert "quit at once" in err
     sealed = checkpoint.sealed_steps(run / "checkpoints")
     assert sealed and all(checkpoint.read_record(run / "checkpoints", s)[1] == s for s in sealed)  # each verifies
 
