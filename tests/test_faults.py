@@ -13,8 +13,10 @@ from jaxbridge.run import checkpoint
 
 # ---- Ctrl-C, with real signals --------------------------------------------------------------------------
 def test_ctrl_c_during_start_up_exits_at_once_saying_nothing_was_trained(tmp_path):
-    proc = start(*QUICK, "--cycles", "5", "--out", str(tmp_path), "--name", "early")
-    wait_for(tmp_path / "early" / ".lock", proc)
+    # held before its first cycle: the press lands during start-up however fast the machine
+    proc = start_held(0, tmp_path / "signals", *QUICK, "--cycles", "5", "--out", str(tmp_path), "--name", "early")
+    wait_for(tmp_path / "signals" / "held", proc)
+    assert (tmp_path / "early" / ".lock").exists()
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and "nothing was trained" in err and "Traceback" not in err
