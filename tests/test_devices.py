@@ -1,11 +1,9 @@
 """Sharding the seeds over devices does not change a single bit: a short training on 2 virtual CPU
-devices (3 seeds: one padded slot) gives the metrics and parameters of 1 device, compiled as users
-compile (XLA's default optimisation level, not the suite's cheaper one). (Seed blocks on 1 and
+devices (3 seeds: one padded slot) gives the metrics and parameters of 1 device. (Seed blocks on 1 and
 2 devices: tests/test_optim.py.) (Checkpoints hold the
 unpadded state on one device whatever the count, so a run also resumes on another device count to the
 same numbers: checked by hand, see docs/PERFORMANCE.md; not in the suite, for time.)"""
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -18,7 +16,6 @@ from jaxbridge.run import checkpoint
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh, device_count_arg
 from jaxbridge.learn.setup import make_setup
-from run_helpers import TEST_XLA_FLAGS
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ["--num-seeds", "3", "--cycles", "3", "--updates-per-cycle", "20", "--checkpoint-every", "1",
@@ -30,9 +27,9 @@ def train(*args, env=None):
                           timeout=600, env=env)
 
 
-def start(*args, env=None):
+def start(*args):
     return subprocess.Popen([sys.executable, "train.py", *args], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env)
+                            stderr=subprocess.PIPE, text=True)
 
 
 def exact(run_dir: Path):
@@ -55,10 +52,8 @@ def same(a, b) -> bool:
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
-    # Both at once (each compiles its program on one core for most of its time), at XLA's default
-    # optimisation level, which users run: the suite's cheaper code generation (conftest) is left out.
-    env = {**os.environ, "XLA_FLAGS": os.environ.get("XLA_FLAGS", "").replace(TEST_XLA_FLAGS, "").strip()}
-    procs = [start(*SHORT, "--devices", str(n), "--out", str(out), "--name", f"dev{n}", env=env) for n in (1, 2)]
+    # Both at once (each compiles its program on one core for most of its time).
+    procs = [start(*SHORT, "--devices", str(n), "--out", str(out), "--name", f"dev{n}") for n in (1, 2)]
     for proc in procs:
         _, err = proc.communicate(timeout=600)
         assert proc.returncode == 0, err
