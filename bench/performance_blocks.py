@@ -90,7 +90,9 @@ def suite_line() -> str:
     record = read(SUITE)
     if record is None:
         return MISSING.format(command="python -m bench.suite")
-    return (f"`{record['command']}`: {record['outcome'].split(' in ')[0]} in {record['wall_s']:,.0f} s ({minutes(record['wall_s'])}) "
+    wall = record["wall_s"]
+    return (f"`{record['command']}`: {record['outcome'].split(' in ')[0]} in {wall:,.0f} s ({int(wall // 60)} min "
+            f"{wall % 60:.0f} s; the target: under 8 minutes) "
             f"on {machine_text(record['machine'])}, commit {record['commit'][:10]} (`python -m bench.suite`).\n")
 
 
