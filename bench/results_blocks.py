@@ -54,16 +54,11 @@ def authors_rows(env: str) -> dict[str, dict[tuple[str, str], dict]]:
 
 # ---------------------------------------------------------------- cells
 
-def interval(value: float, low: float, high: float, signed: bool = False) -> str:
-    """"0.85 [0.70, 0.95]", or the value alone where the interval rounds to one point (stats.ci_text)."""
-    return stats.ci_text(value, (low, high), signed)
-
-
 def stat_cell(row: dict, name: str, signed: bool = False) -> str:
     """Mean [95% CI] and, beside it, IQM [95% CI] of curve `name` in a results.csv row."""
     f = lambda s: float(row[f"{name}_{s}"])
-    mean = interval(f("mean"), f("mean_low"), f("mean_high"), signed)
-    iqm = interval(f("iqm"), f("iqm_low"), f("iqm_high"), signed)
+    mean = stats.ci_text(f("mean"), (f("mean_low"), f("mean_high")), signed)
+    iqm = stats.ci_text(f("iqm"), (f("iqm_low"), f("iqm_high")), signed)
     return f"{mean}<br>IQM {iqm}"
 
 
@@ -75,7 +70,7 @@ def drop_cell(row: dict) -> str:
 def mean_ci(values: list[float]) -> str:
     """Mean [95% bootstrap CI] over seeds of per-seed values."""
     described = stats.describe(np.asarray(values))
-    return interval(float(described["mean"]), float(described["mean_low"]), float(described["mean_high"]))
+    return stats.ci_text(float(described["mean"]), (float(described["mean_low"]), float(described["mean_high"])))
 
 
 def authors_cell(row: dict | None) -> str:
@@ -161,7 +156,8 @@ def ceiling(record: dict, protocol: str) -> str:
 def stat_row(record: dict, run: str) -> dict:
     """The figures the README quotes for `run`: seeds, mean [95% CI] at cycles 10 and 100, the ceiling."""
     rows = {int(r["cycle"]): r for r in record["results"] if r["approach"] == run}
-    mean = lambda c: interval(*(float(rows[c][f"test_solve_rate_{s}"]) for s in ("mean", "mean_low", "mean_high")))
+    value = lambda c, s: float(rows[c][f"test_solve_rate_{s}"])
+    mean = lambda c: stats.ci_text(value(c, "mean"), (value(c, "mean_low"), value(c, "mean_high")))
     return {"seeds": int(rows[1]["seeds"]), "at10": mean(10), "at100": mean(max(rows)),
             "ceiling": ceiling(record, record["run"]["test_protocols"]["main"])}
 

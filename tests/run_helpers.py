@@ -1,4 +1,6 @@
 """Running train.py in a child process, and what the safety and fault tests assert of its errors."""
+import os
+import select
 import subprocess
 import sys
 import time
@@ -31,8 +33,9 @@ def snapshot(directory: Path) -> dict:
 
 
 def start_held(hold_after: int, signals: Path, *args, **popen) -> subprocess.Popen:
-    """train.py that waits after sealing checkpoint `hold_after` (tests/held_train.py): `signals`/held
-    appears then, and it goes on once the test writes `signals`/release."""
+    """train.py that waits after sealing checkpoint `hold_after`, or before its first cycle for 0
+    (tests/held_train.py): `signals`/held appears then, and it goes on once the test writes
+    `signals`/release."""
     signals.mkdir(parents=True, exist_ok=True)
     return subprocess.Popen([sys.executable, str(ROOT / "tests" / "held_train.py"), str(hold_after), str(signals), *args],
                             cwd=ROOT, **{"stdout": subprocess.PIPE, "stderr": subprocess.PIPE, "text": True, **popen})
@@ -41,8 +44,6 @@ def start_held(hold_after: int, signals: Path, *args, **popen) -> subprocess.Pop
 def wait_for_line(proc: subprocess.Popen, text: str, seconds: float = 120) -> None:
     """Read the process's stderr pipe (its bytes, past any buffering) until `text` appears; fail if it
     ends or `seconds` pass first. Whatever follows stays for `proc.communicate()`."""
-    import os
-    import select
     fd, seen, deadline = proc.stderr.fileno(), b"", time.time() + seconds
     while text.encode() not in seen:
         left = deadline - time.time()

@@ -28,8 +28,9 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
           "epsilon_end": (0, 1, True), "epsilon_decay": (0, None, True), "num_seeds": (1, None, True),
           "cycles": (1, None, True), "episodes_per_cycle": (1, None, True), "train_steps": (1, None, True),
           "num_test_tasks": (1, None, True), "updates_per_cycle": (0, None, True), "fit_patience": (0, None, True),
-          "batch_size": (1, None, True), "low_level_budget": (1, None, True), "feature_noise": (0, None, True), "step_gamma": (0, 1, False),
-          "q_ensemble": (1, None, True), "n_sample": (1, None, True), "n_target_sample": (1, None, True),
+          "batch_size": (1, None, True), "low_level_budget": (1, None, True), "feature_noise": (0, None, True),
+          "step_gamma": (0, 1, False), "q_ensemble": (1, None, True), "n_sample": (1, None, True),
+          "n_target_sample": (1, None, True),
           "buffer_capacity": (1, None, True), "checkpoint_every": (1, None, True), "seed_block": (1, None, True),
           "first_seed": (0, None, True)}
 
@@ -212,6 +213,11 @@ class TrainConfig:
         from envs_jax import env_class
         from jaxbridge.core.presets import preset_values
         return cls(env=env, **{**preset_values(preset, env_class(env)), **overrides})
+
+    @property
+    def counts_steps(self) -> bool:
+        """Transitions keep their env step count: a step discount is on (`step_gamma` below 1)."""
+        return self.step_gamma < 1
 
     @property
     def seeds(self) -> list[int]:

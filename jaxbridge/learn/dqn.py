@@ -116,7 +116,7 @@ def empty_transition(dqn: DQN) -> Transition:
                                  done=jnp.bool_(True), next_features=f,
                                  next_num_ground=jnp.zeros(dqn.env.num_skills + 1, jnp.int32),
                                  task=None if dqn.split is None else jnp.int32(0),
-                                 steps=jnp.int32(0) if dqn.config.step_gamma < 1 else None))
+                                 steps=jnp.int32(0) if dqn.config.counts_steps else None))
 
 
 def init_learner(dqn: DQN, key: jax.Array) -> Learner:
