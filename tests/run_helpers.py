@@ -16,11 +16,6 @@ def train(*args, timeout=600) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "train.py", *args], cwd=ROOT, capture_output=True, text=True, timeout=timeout)
 
 
-def start(*args) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "train.py", *args], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-
-
 def one_line_error(proc, code: int, *words: str) -> None:
     err = proc.stderr.strip()
     assert proc.returncode == code, proc.stderr
