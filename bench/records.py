@@ -15,6 +15,7 @@ ENVS = ("light_switch_door", "doorknobs", "coffee")  # the built-in envs every r
 RECORDS = ROOT / "docs" / "results"
 QUICKSTART = RECORDS / "quickstart.json"  # bench.quickstart: the README's first command per env
 SUITE = RECORDS / "suite.json"  # bench.suite: the README's second command
+SUITE_CLAIMS = RECORDS / "suite_claims.json"  # bench.suite --claims: the claim tests (-m claims)
 BENCH = ROOT / "bench" / "results.json"  # python -m bench: the benchmark table
 # The test seeds (first, count): every headline figure and nothing else. If a result on them ever
 # motivates a change, they are spent and the next range (300, 32) takes their place (docs/RESULTS.md).

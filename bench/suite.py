@@ -1,6 +1,7 @@
-"""The test suite's wall time, as the README's second command runs it, into docs/results/suite.json.
+"""The test suite's wall time, as the README's second command runs it, into docs/results/suite.json; with
+--claims, the paper's claims on every env (tests/test_claims.py, `-m claims`) into suite_claims.json.
 
-    python -m bench.suite
+    python -m bench.suite [--claims]
 
 Runs `python -m pytest` from the repository root (its persistent compilation cache as it is: run it on a
 fresh clone, as CI does, for the figure docs/PERFORMANCE.md quotes) and records the wall time, the
@@ -15,24 +16,27 @@ import subprocess
 import sys
 import time
 
-from bench.records import ROOT, SUITE, git_commit, machine
+from bench.records import ROOT, SUITE, SUITE_CLAIMS, git_commit, machine
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.suite", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.parse_args(argv)
+    parser.add_argument("--claims", action="store_true",
+                        help="time the claim tests (python -m pytest -m claims) instead of the default suite")
+    args = parser.parse_args(argv)
+    command, path = (["-m", "pytest", "-m", "claims"], SUITE_CLAIMS) if args.claims else (["-m", "pytest"], SUITE)
     start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "pytest"], cwd=ROOT, capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, *command], cwd=ROOT, capture_output=True, text=True)
     wall = time.perf_counter() - start
     outcome = next((line.strip("= ") for line in reversed(proc.stdout.splitlines()) if re.search(r"\d+ passed", line)), "")
     if proc.returncode != 0:
         sys.stdout.write(proc.stdout[-5000:])
         raise SystemExit(f"bench.suite: the suite failed (exit {proc.returncode}); nothing recorded")
-    record = {"command": "python -m pytest", "wall_s": round(wall, 1), "outcome": outcome, "commit": git_commit(),
+    record = {"command": " ".join(["python", *command]), "wall_s": round(wall, 1), "outcome": outcome, "commit": git_commit(),
               "machine": machine()}
-    SUITE.write_text(json.dumps(record, indent=2) + "\n")
-    print(f"bench.suite: {outcome} in {wall:.0f} s -> {SUITE}")
+    path.write_text(json.dumps(record, indent=2) + "\n")
+    print(f"bench.suite: {outcome} in {wall:.0f} s -> {path}")
     return 0
 
 
