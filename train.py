@@ -31,7 +31,7 @@ from envs_jax import registered
 from jaxbridge.commands import train as command
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import PRESETS
-from jaxbridge.learn.approaches import APPROACHES, KNOWN, LOW_LEVEL
+from jaxbridge.learn.approaches import APPROACHES, KNOWN, LOW_LEVEL, PLAN_REPAIR
 from jaxbridge.learn.devices import configure_cpu_devices, device_count_arg, select_devices
 from jaxbridge.utils import compile_cache, distributed
 from jaxbridge.utils.cli import ArgumentParser, UsageError, non_negative_int, positive_float, positive_int, run_main
@@ -70,7 +70,8 @@ def parse_args(argv):
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: the paper's figure for the env: "
                         f"the six, {', '.join(APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
-                        f"Doorknobs figure; by name only: {', '.join(LOW_LEVEL)})")
+                        f"Doorknobs figure; by name only: the plan-repair baselines {', '.join(PLAN_REPAIR)} and the "
+                        f"low-level ones {', '.join(LOW_LEVEL)})")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,

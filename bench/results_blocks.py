@@ -92,6 +92,27 @@ def authors_test_cells(theirs: dict, cycles) -> list[str]:
 
 # ---------------------------------------------------------------- blocks
 
+def by_approach(results: list[dict]) -> tuple[dict[str, dict[int, dict]], int]:
+    """results.csv rows as {approach: {cycle: row}}, and the last cycle."""
+    by_run: dict[str, dict[int, dict]] = {}
+    for row in results:
+        by_run.setdefault(row["approach"], {})[int(row["cycle"])] = row
+    return by_run, max(max(cycles) for cycles in by_run.values())
+
+
+def table_header(last: int) -> list[str]:
+    return ["| approach | cycle " + " | cycle ".join(map(str, CYCLES)) + f" | smooth reward at {last} (test) | (training) "
+            f"| cycle {last} minus the best before |", "|---|" + "---|" * (len(CYCLES) + 3)]
+
+
+def approach_row(name: str, cycles: dict[int, dict], last: int) -> str:
+    """An approach's test solve rate at CYCLES, smooth rewards and drop from its best, from results.csv rows."""
+    return (f"| **{label(name)}** | " + " | ".join(stat_cell(cycles[c], "test_solve_rate") if c in cycles else ""
+                                                 for c in CYCLES)
+            + f" | {stat_cell(cycles[last], 'test_smooth_reward')} | {stat_cell(cycles[last], 'train_smooth_reward')} "
+            f"| {drop_cell(cycles[last])} |")
+
+
 def headline(env: str) -> str:
     """RESULTS.md's table for `env`: every approach, ours with --preset authors, the oracle's ceiling
     under each test protocol, and the authors' logged numbers, with the command that made them."""
@@ -99,22 +120,13 @@ def headline(env: str) -> str:
     if record is None:
         return f"_Not generated yet: `python -m bench.paper --env {env}`._\n"
     run = record["run"]
-    by_run: dict[str, dict[int, dict]] = {}
-    for row in record["results"]:
-        by_run.setdefault(row["approach"], {})[int(row["cycle"])] = row
-    last = max(max(cycles) for cycles in by_run.values())
+    by_run, last = by_approach(record["results"])
     lines = [f"Test seeds {run['seeds']}, {int(record['results'][0]['seeds'])} seeds x {last} cycles; each cell: "
              "mean [95% CI] over seeds, IQM [95% CI] beside it; the authors' rows: their mean [lowest, highest "
-             "seed] (docs/results/authors.csv).", "",
-             "| approach | cycle " + " | cycle ".join(map(str, CYCLES)) + f" | smooth reward at {last} (test) | (training) "
-             f"| cycle {last} minus the best before |",
-             "|---|" + "---|" * (len(CYCLES) + 3)]
+             "seed] (docs/results/authors.csv).", "", *table_header(last)]
     authors = authors_rows(env)
     for name, cycles in by_run.items():
-        lines.append(f"| **{label(name)}** | " + " | ".join(
-            stat_cell(cycles[c], "test_solve_rate") if c in cycles else "" for c in CYCLES)
-            + f" | {stat_cell(cycles[last], 'test_smooth_reward')} | {stat_cell(cycles[last], 'train_smooth_reward')} "
-            f"| {drop_cell(cycles[last])} |")
+        lines.append(approach_row(name, cycles, last))
         if name in authors and name != PRESET_RUN:
             lines.append(authors_row(name, authors[name]))
     lines += ceiling_rows(record) + ["", provenance(run), "", f"![{ENV_TITLES[env]}, test seeds](results/{env}/figure.png)"]
@@ -171,24 +183,50 @@ def sweep_table(env: str) -> str:
     record = env_record(env)
     if record is None:
         return f"_Not generated yet: `python -m bench.paper --env {env}`._\n"
-    counted = [k for k in record["sweep"][0] if k not in ("line", "seed", "tasks", "solve_rate")][0]
+    run = record["run"]
+    return (novelty_table(env, record["sweep"], run["seeds"], run["steps"]["sweep"]["command"])
+            + f"\n![{ENV_TITLES[env]}, generalisation](./{env}/sweep.png)\n")
+
+
+def novelty_table(env: str, sweep_rows: list[dict], seeds: str, command: str) -> str:
+    """Solve rate per novelty count (rows) and line (columns) of a sweep.csv: mean [95% CI] over seeds."""
+    counted = [k for k in sweep_rows[0] if k not in ("line", "seed", "tasks", "solve_rate")][0]
     lines_by_label: dict[str, dict[int, list[float]]] = {}
-    for row in record["sweep"]:
+    for row in sweep_rows:
         lines_by_label.setdefault(row["line"], {}).setdefault(int(row[counted]), []).append(
             float(row["solve_rate"]) if row["solve_rate"] else float("nan"))
     counts = sorted(next(iter(lines_by_label.values())))
-    tasks = record["sweep"][0]["tasks"]
+    tasks = sweep_rows[0]["tasks"]
     sweep = env_class(env).novelty_sweep
-    out = [f"The number of {sweep.counted} {sweep.setting}: the final bridges of test seeds {record['run']['seeds']}, "
-           f"{tasks} tasks per count and seed; mean [95% CI] over seeds (`{record['run']['steps']['sweep']['command']}`).", "",
+    out = [f"The number of {sweep.counted} {sweep.setting}: the final bridges of test seeds {seeds}, "
+           f"{tasks} tasks per count and seed; mean [95% CI] over seeds (`{command}`).", "",
            f"| {counted.replace('_', ' ')} | " + " | ".join(lines_by_label) + " |", "|---|" + "---|" * len(lines_by_label)]
     for k in counts:
         cells = ["n/a" if np.isnan(by_count[k]).all() else mean_ci(by_count[k]) for by_count in lines_by_label.values()]
         out.append(f"| {k} | " + " | ".join(cells) + " |")
-    return "\n".join(out) + "\n" + f"\n![{ENV_TITLES[env]}, generalisation](./{env}/sweep.png)\n"
+    return "\n".join(out) + "\n"
+
+
+def plan_repair(env: str) -> str:
+    """RESULTS.md's plan-repair table for `env`: ours and the two plan-repair baselines on the test seeds,
+    then their generalisation sweep (bench.plan_repair's records)."""
+    folder = RECORDS / env
+    run = read_json(folder / "plan_repair.json")
+    if run is None:
+        return f"_Not generated yet: `python -m bench.plan_repair --env {env}`._\n"
+    results = read_csv(folder / "plan_repair.csv")
+    by_run, last = by_approach(results)
+    lines = [f"Test seeds {run['seeds']}, {int(results[0]['seeds'])} seeds x {last} cycles; each cell: mean [95% CI] "
+             "over seeds, IQM [95% CI] beside it.", "", *table_header(last)]
+    lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
+    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit "
+              f"{run['commit'][:10]}.", "",
+              novelty_table(env, read_csv(folder / "plan_repair_sweep.csv"), run["seeds"], run["steps"]["sweep"]["command"])]
+    return "\n".join(lines)
 
 
 BLOCKS = {**{f"headline {env}": (lambda env=env: headline(env)) for env in ENVS},
-          **{f"sweep {env}": (lambda env=env: sweep_table(env)) for env in ENVS}}
+          **{f"sweep {env}": (lambda env=env: sweep_table(env)) for env in ENVS},
+          **{f"plan repair {env}": (lambda env=env: plan_repair(env)) for env in ENVS}}
 
 

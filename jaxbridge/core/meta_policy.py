@@ -32,7 +32,8 @@ from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Brid
                            idle_call, tree_where)
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.tasks import TaskArrays
-from planner.tables import PlanLookup, PlanTable, batched_plan_lookup, holds_all, num_words, pack_atoms
+from planner.tables import (PlanLookup, PlanTable, batched_plan_lookup, holds_all, num_words, pack_atoms,
+                            table_lookup)
 
 PLANNER, BRIDGE = 0, 1  # who is in control of an episode
 
@@ -49,6 +50,11 @@ class Controls:
     full_state: bool = False  # the bridge sees every object's raw features instead of the selected ones
     loop_guard: bool = False  # a skill that left the state unchanged is not applicable again in that state
     low_level: bool = False  # the bridge emits the env's raw action each step instead of a skill (brax baselines)
+    # The plan-repair baselines (issue 38, docs/DESIGN.md): the bridge's problem ends once the abstract
+    # state holds every atom of a later state of the plan it got stuck in; control then goes back to
+    # the planner, which replans, or with `resume_plan` continues that plan from the state reached.
+    plan_progress: bool = False
+    resume_plan: bool = False
 
 
 def observation_size(env: NoveltyEnv, controls: Controls) -> int:
@@ -81,6 +87,12 @@ class Episode:
     decision_vec: jax.Array  # float32[D]: low-level state at the bridge's last decision (loop guard)
     decision_skill: jax.Array  # int32: the skill it chose there (-1: none yet; num_skills: CallPlanner)
     no_op_skills: jax.Array  # bool[num_skills]: skills the bridge chose in this state that left it unchanged
+    # The current plan, with `plan_progress` (zero length without): its abstract states from the one it
+    # was made in, the operator from each to the next (-1 past its end), and where the episode is on it.
+    plan_keys: jax.Array  # uint32[L, W]
+    plan_ops: jax.Array  # int32[L]
+    plan_at: jax.Array  # int32: the index of the plan state the running operator should reach
+    new_plan: jax.Array  # bool: the next operator starts a new plan, whose states are then recorded
 
 
 @struct.dataclass
@@ -110,6 +122,7 @@ class StepRecord:
     features: jax.Array  # float32[F]: the bridge's observation (at decisions; zeros otherwise)
     num_ground: jax.Array  # int32[num_skills + 1]: its applicable actions (at decisions)
     env_state: Any  # state before the step
+    progressed: jax.Array  # bool: the bridge reached a later state of the plan here and handed back (plan_progress)
 
     @property
     def can_plan(self) -> jax.Array:
@@ -132,9 +145,9 @@ def same_state(a: jax.Array, b: jax.Array) -> jax.Array:
     return jnp.all(jnp.abs(a - b) <= 1e-8 + 1e-5 * jnp.abs(b))
 
 
-def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.Array) -> Episode:
+def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.Array, plan_length: int = 0) -> Episode:
     """The planner starts in control with a plan from the initial state (without a planner, the bridge
-    starts)."""
+    starts). `plan_length`: the plan states kept with `plan_progress`."""
     state = env.reset(task)
     vec = env.state_vector(state)
     zero = jnp.int32(0)
@@ -145,7 +158,9 @@ def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.A
                    prev_vec=vec, planner_stepped=jnp.bool_(False), bridge_vec=vec,
                    planner_calls=jnp.int32(int(controls.planner)), table_misses=zero, bridge_decisions=zero,
                    stuck_events=zero, decision_vec=vec, decision_skill=jnp.int32(-1),
-                   no_op_skills=jnp.zeros(env.num_skills, bool))
+                   no_op_skills=jnp.zeros(env.num_skills, bool),
+                   plan_keys=jnp.zeros((plan_length, num_words(env.num_atoms)), jnp.uint32),
+                   plan_ops=jnp.full(plan_length, -1, jnp.int32), plan_at=zero, new_plan=jnp.bool_(True))
 
 
 def observe(env: NoveltyEnv, ep: Episode):
@@ -230,6 +245,7 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, plan: PlanLooku
         bridge_vec=jnp.where(stuck, vec, ep.bridge_vec),
         table_misses=ep.table_misses + (plan.miss & needs_op),
         stuck_events=ep.stuck_events + stuck,
+        plan_at=ep.plan_at + start_op,
     )
     decide = live & (ep.control == BRIDGE) & ~ep.call.running
     return ep, decide
@@ -258,8 +274,8 @@ def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any
                     features=obs.features, num_ground=num_ground, no_op_skills=no_ops, action=action)
 
 
-def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
-            stuck: jax.Array, low_level: bool = False) -> tuple[Episode, StepRecord]:
+def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision, stuck: jax.Array,
+            progressed: jax.Array, low_level: bool = False) -> tuple[Episode, StepRecord]:
     """Start the bridge's decision if it made one, then take one env step (a low-level bridge's decision
     is its raw action for this one step: no skill starts, and it decides again at the next)."""
     state, live = ep.env_state, ~ep.done
@@ -283,7 +299,7 @@ def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
     record = StepRecord(live=live, actor=actor, decided=decide, stuck=stuck,
                         skill=jnp.where(call_planner, env.num_skills, call.skill), slot=call.slot,
                         param=call.param, features=decision.features, num_ground=decision.num_ground,
-                        env_state=state)
+                        env_state=state, progressed=progressed)
     ep = ep.replace(
         env_state=next_state,
         t=ep.t + live,
@@ -300,6 +316,58 @@ def execute(env: NoveltyEnv, ep: Episode, decide: jax.Array, decision: Decision,
         no_op_skills=jnp.where(decide, decision.no_op_skills, ep.no_op_skills),
     )
     return ep, record
+
+
+def plan_states(table: PlanTable, key: jax.Array, first: PlanLookup, length: int) -> tuple[jax.Array, jax.Array]:
+    """The plan from abstract state `key`: its states (uint32[length, W], `key` first) and the operator
+    from each to the next (int32[length], -1 past the plan's end). The first step is `first` (the
+    table's or the host planner's answer at `key`), the rest the table's; the plan ends at the goal,
+    a dead end, a state the table lacks, or `length`."""
+    def follow(carry, k):
+        key, going = carry
+        look = tree_where(k == 0, first, table_lookup(table, key))
+        op = jnp.where(going & look.found, look.op, -1)
+        return (look.next_key, op >= 0), (key, op)
+
+    _, (keys, ops) = jax.lax.scan(follow, (key, jnp.bool_(True)), jnp.arange(length))
+    return keys, ops
+
+
+def hand_back_at_progress(resume_plan: bool, ep: Episode, atoms: jax.Array) -> tuple[Episode, jax.Array]:
+    """Where the bridge's skill has finished in a state holding every atom of a later state of its plan
+    than the one the planner was heading for when stuck (the furthest such), control goes back to the
+    planner: to that state's place in the plan with `resume_plan`, else to a new plan."""
+    index = jnp.arange(ep.plan_ops.shape[0])
+    is_state = jnp.concatenate([jnp.ones(1, bool), ep.plan_ops[:-1] >= 0])
+    reached = is_state & (index >= jnp.maximum(ep.plan_at, 1)) & holds_all(ep.plan_keys, atoms[None, :])
+    at = jnp.max(jnp.where(reached, index, -1))
+    progressed = ~ep.done & (ep.control == BRIDGE) & ~ep.call.running & (at >= 0)
+    replan = progressed & (not resume_plan)
+    return ep.replace(control=jnp.where(progressed, PLANNER, ep.control),
+                      expected=jnp.where(progressed, jnp.zeros_like(ep.expected), ep.expected),
+                      plan_at=jnp.where(progressed & resume_plan, at, ep.plan_at),
+                      new_plan=ep.new_plan | replan, planner_calls=ep.planner_calls + replan), progressed
+
+
+def follow_plan(resume_plan: bool, tables: PlanTable, episodes: Episode, atoms: jax.Array, plan: PlanLookup,
+                need_plan: jax.Array) -> tuple[Episode, PlanLookup]:
+    """Record the plan of every episode starting one (a batch; only on steps where some does); with
+    `resume_plan`, the planner's next operator is the recorded plan's, not the table's."""
+    new = need_plan & episodes.new_plan
+    length = episodes.plan_ops.shape[-1]
+
+    def record(_):
+        keys, ops = jax.vmap(partial(plan_states, length=length))(tables, atoms, plan)
+        return jnp.where(new[:, None, None], keys, episodes.plan_keys), jnp.where(new[:, None], ops, episodes.plan_ops)
+
+    keys, ops = jax.lax.cond(jnp.any(new), record, lambda _: (episodes.plan_keys, episodes.plan_ops), None)
+    episodes = episodes.replace(plan_keys=keys, plan_ops=ops, plan_at=jnp.where(new, 0, episodes.plan_at),
+                                new_plan=episodes.new_plan & ~new)
+    if resume_plan:
+        rows = jnp.arange(ops.shape[0])
+        op = ops[rows, episodes.plan_at]
+        plan = plan.replace(found=op >= 0, op=op, next_key=keys[rows, jnp.minimum(episodes.plan_at + 1, length - 1)])
+    return episodes, plan
 
 
 def step_randomness(keys: jax.Array, max_steps: int):
@@ -328,19 +396,27 @@ class PlannerTurn:
     atoms: jax.Array  # uint32[B, W]: the packed abstract states
     decide: jax.Array  # bool[B]: the bridge must choose now
     stuck: jax.Array  # bool[B]: the planner got stuck at this state
+    progressed: jax.Array  # bool[B]: the bridge reached a later state of its plan and handed back (plan_progress)
 
 
 def planner_step(env: NoveltyEnv, controls: Controls, tables: PlanTable, episodes: Episode,
                  param_uniforms: jax.Array, host_planner: bool = True) -> PlannerTurn:
-    """Steps 1-3 on a batch: observe, look the plan up, the planner's turn."""
+    """Steps 1-3 on a batch: observe (with `plan_progress`, the bridge's hand-back at a later plan state),
+    look the plan up, the planner's turn."""
     episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
+    progressed = jnp.zeros_like(need_plan)
+    if controls.plan_progress:
+        episodes, progressed = jax.vmap(partial(hand_back_at_progress, controls.resume_plan))(episodes, packed)
+        need_plan = need_plan | progressed
     if controls.planner:
         plan = batched_plan_lookup(tables, packed, need_plan, host_planner)
     else:  # pure RL: the control never returns to a planner, nothing is looked up
         plan = no_plan(packed.shape[0], packed.shape[-1])
+    if controls.plan_progress:
+        episodes, plan = follow_plan(controls.resume_plan, tables, episodes, packed, plan, need_plan)
     stuck_before = episodes.stuck_events
     episodes, decide = jax.vmap(partial(planner_turn, env))(episodes, packed, plan, tables, param_uniforms)
-    return PlannerTurn(episodes, packed, decide, episodes.stuck_events > stuck_before)
+    return PlannerTurn(episodes, packed, decide, episodes.stuck_events > stuck_before, progressed)
 
 
 def bridge_step(env: NoveltyEnv, controls: Controls, bridge: Bridge, bridge_params: Any, tables: PlanTable,
@@ -360,7 +436,7 @@ def bridge_step(env: NoveltyEnv, controls: Controls, bridge: Bridge, bridge_para
             bridge_params, episodes, tables, turn.atoms, bridge_keys, choice_bits),
         lambda: no_decision)
     episodes, rec = jax.vmap(partial(execute, env, low_level=controls.low_level))(episodes, turn.decide, decision,
-                                                                                  turn.stuck)
+                                                                                  turn.stuck, turn.progressed)
     return episodes.replace(env_state=env.share_between_episodes(episodes.env_state, groups)), rec
 
 
@@ -383,7 +459,8 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArra
     tasks, tables, horizons = batch.tasks, batch.tables, batch.horizons
     num_episodes = horizons.shape[0]
     groups = jnp.zeros(num_episodes, jnp.int32) if groups is None else groups
-    episodes = jax.vmap(partial(start_episode, env, controls))(tasks, horizons)
+    plan_length = max_steps + 1 if controls.plan_progress else 0  # no plan is longer than the episode
+    episodes = jax.vmap(partial(start_episode, env, controls, plan_length=plan_length))(tasks, horizons)
 
     def step(episodes: Episode, randomness):
         param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]

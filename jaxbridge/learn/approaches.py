@@ -77,7 +77,19 @@ LOW_LEVEL = {a.name: a for a in (
                                 ("_callplanner", " + CallPlanner", "; one more action dimension hands control to the planner"),
                                 ("_full_state", ", full state", "; it sees every object's raw features")))}
 
-KNOWN = {**APPROACHES, **LOW_LEVEL}
+# The comparison the paper says it lacks (issue 38; docs/DESIGN.md, "Plan repair"): the bridge's reward
+# comes from the plan it got stuck in (RAPid-Learn style: a cost per step, a reward on reaching a later
+# state of that plan, which ends its problem), with no CallPlanner; then the plan resumes from the
+# state reached, or the planner replans. Not among "all".
+PLAN_REPAIR = {a.name: a for a in (
+    Approach("plan_progress", "plan progress", "q", Controls(call_planner=False, plan_progress=True, resume_plan=True),
+             "rewarded for reaching a later state of the stuck plan, which then resumes there; no CallPlanner"),
+    Approach("plan_progress_replan", "plan progress, replanning", "q",
+             Controls(call_planner=False, plan_progress=True),
+             "rewarded for reaching a later state of the stuck plan; then the planner replans; no CallPlanner"),
+)}
+
+KNOWN = {**APPROACHES, **LOW_LEVEL, **PLAN_REPAIR}
 
 
 def get_approach(name: str) -> Approach:

@@ -100,8 +100,9 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
 
         if approach.learns:
             # 2. One transition per bridge decision into the replay buffer.
-            transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None, None))(
-                records, result.success, call_planner, hyper.call_planner_bonus, config.counts_steps)
+            transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None, None, None))(
+                records, result.success, call_planner, hyper.call_planner_bonus, config.counts_steps,
+                controls.plan_progress)
             flat = lambda x: x.reshape((-1,) + x.shape[2:])
             buffer = add(learner.buffer, jax.tree.map(flat, stored_transitions(setup.dqn, transitions)), flat(valid))
             learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)

@@ -5,6 +5,9 @@ episode's end. So a CallPlanner transition spans the whole planner rollout after
 next stuck state, or the end of the episode): the paper's atomic CallPlanner. Reward 1 when the goal is
 reached within the transition (plus an optional CallPlanner bonus); the goal ends the MDP, and so does
 the time limit, without bootstrapping.
+
+The plan-repair baselines (`Controls.plan_progress`) have the authors' RAPid-Learn-style rewards instead:
+a cost per env step, and a terminal reward when the bridge hands back at a later state of its plan.
 """
 from __future__ import annotations
 
@@ -13,6 +16,11 @@ import jax.numpy as jnp
 from flax import struct
 
 from jaxbridge.core.meta_policy import StepRecord
+
+# The authors' plan-progress rewards (-1 per step, a large reward at a later plan state) scaled to ours'
+# reward of 1 at the end: a step costs 0.01, so a whole training episode (100 steps) costs as much as
+# reaching the plan is worth.
+PROGRESS_STEP_COST = 0.01
 
 
 @struct.dataclass
@@ -29,9 +37,11 @@ class Transition:
 
 
 def episode_transitions(records: StepRecord, success: jax.Array, call_planner_skill: int,
-                        call_planner_bonus: float = 0.0, count_steps: bool = False
+                        call_planner_bonus: float = 0.0, count_steps: bool = False, plan_progress: bool = False
                         ) -> tuple[Transition, jax.Array]:
-    """Transitions of one episode (records over time, [T]); returns (Transition[T], valid[T])."""
+    """Transitions of one episode (records over time, [T]); returns (Transition[T], valid[T]). With
+    `plan_progress`, a transition during which the bridge handed back at a later plan state ends its MDP
+    with reward 1; any other costs PROGRESS_STEP_COST per env step (1 if it reached the goal)."""
     steps = records.decided.shape[0]
     decided = records.decided & records.live
     index = jnp.arange(steps)
@@ -46,9 +56,15 @@ def episode_transitions(records: StepRecord, success: jax.Array, call_planner_sk
     # The env steps from each decision to the next one (or to the episode's end).
     live_before = jnp.concatenate([jnp.zeros(1, jnp.int32), jnp.cumsum(records.live.astype(jnp.int32))])
     span = live_before[next_decision] - live_before[index]
+    reward, done = jnp.where(goal, 1.0 + bonus, 0.0), ~has_next
+    if plan_progress:  # a hand-back in (t, next decision]; counted as the episode's steps are above
+        handed_back = jnp.concatenate([jnp.zeros(1, jnp.int32), jnp.cumsum(records.progressed.astype(jnp.int32))])
+        reached = handed_back[nxt + 1] > handed_back[index + 1]
+        reward = jnp.where(reached | goal, 1.0, -PROGRESS_STEP_COST * span)
+        done = done | reached
     transition = Transition(
         features=records.features, skill=records.skill, param=records.param,
-        reward=jnp.where(goal, 1.0 + bonus, 0.0).astype(jnp.float32), done=~has_next,
+        reward=reward.astype(jnp.float32), done=done,
         next_features=records.features[nxt], next_num_ground=records.num_ground[nxt],
         steps=span if count_steps else None)
     return transition, decided

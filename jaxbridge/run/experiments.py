@@ -30,8 +30,8 @@ from jaxbridge.utils.progress import cycle_progress
 EXPERIMENT_FILE = "experiment.json"
 # Seconds per approach in `python -m bench.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
 # longest start first, so the workers finish close together.
-COST = {"maple_q": 200, "no_feature_selection": 172, "no_callplanner": 172, "ours": 111, "random": 20,
-        "pure_planning": 15}
+COST = {"maple_q": 200, "no_feature_selection": 172, "no_callplanner": 172, "plan_progress": 172,
+        "plan_progress_replan": 172, "ours": 111, "random": 20, "pure_planning": 15}
 
 
 def is_experiment_dir(path: Path) -> bool:

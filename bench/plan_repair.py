@@ -1,0 +1,75 @@
+"""The comparison the paper says is missing, on one env's test seeds: ours beside the plan-repair baselines
+(plan_progress: rewarded for reaching a later state of the stuck plan, which then resumes; and
+plan_progress_replan: the same reward, then the planner replans), written as committed records.
+
+    python -m bench.plan_repair --env light_switch_door   # -> docs/results/light_switch_door/plan_repair*
+
+Steps, each as a user runs it (child processes; wall time and peak memory recorded):
+  1. train.py --env E --approaches ours,plan_progress,plan_progress_replan on the test seeds;
+  2. eval.py RUN --sweep novelties: their final bridges on more and more novelties.
+It writes plan_repair.csv (every run's statistics at every cycle), plan_repair_sweep.csv,
+plan_repair.png, plan_repair_sweep.png and plan_repair.json (commit, commands, times, machine) into
+docs/results/E/; `python -m bench.render` puts the table into docs/RESULTS.md. A finished step is not
+run again (E-steps.json in the runs directory), and training resumes from its checkpoints.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+import time
+from pathlib import Path
+
+from bench.paper import Steps, csv_text, results_rows, train_step
+from bench.records import ENVS, RECORDS, ROOT, TEST_SEEDS, git_commit, machine, run_child, shown
+from jaxbridge.run.comparison import run_labels, write_comparison
+from jaxbridge.run.experiments import load_experiment
+
+APPROACHES = "ours,plan_progress,plan_progress_replan"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.plan_repair", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", required=True, choices=ENVS, help="the env to compare on")
+    parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "plan_repair",
+                        help="where the training runs go (default: runs/plan_repair)")
+    parser.add_argument("--records", type=Path, default=RECORDS,
+                        help="where the env's records go (default: docs/results)")
+    parser.add_argument("--num-seeds", type=int, default=TEST_SEEDS[1],
+                        help="test seeds from 200 (default: %(default)s; fewer only to try the command out)")
+    parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
+    args = parser.parse_args(argv)
+    first, count = TEST_SEEDS[0], args.num_seeds
+    env, runs = args.env, args.runs.resolve()
+    runs.mkdir(parents=True, exist_ok=True)
+    steps, run = Steps(runs / f"{env}-steps.json"), runs / env
+    start = time.perf_counter()
+
+    train = steps.run("train", lambda: train_step(run, ["--env", env, "--approaches", APPROACHES, "--num-seeds",
+                                                        str(count), "--first-seed", str(first), "--cycles", str(args.cycles)]))
+    sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
+    _, approaches, _ = load_experiment(run)
+    write_comparison(run, env, run_labels(approaches))
+
+    out = args.records / env
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "plan_repair.csv").write_text(csv_text(results_rows(run)))
+    shutil.copy(run / "sweep_novelties.csv", out / "plan_repair_sweep.csv")
+    shutil.copy(run / "sweep_novelties.png", out / "plan_repair_sweep.png")
+    shutil.copy(run / "curves.png", out / "plan_repair.png")
+    record = {"env": env, "commit": git_commit(), "command": f"python -m bench.plan_repair --env {env}" + "".join(
+                  f" --{flag} {value}" for flag, value, default in (("num-seeds", count, TEST_SEEDS[1]), ("cycles", args.cycles, 100))
+                  if value != default),
+              "seeds": f"{first}-{first + count - 1}", "approaches": approaches,
+              "steps": {"train": train, "sweep": sweep},
+              "wall_s": round(train["wall_s"] + sweep["wall_s"], 1), "machine": machine()}
+    (out / "plan_repair.json").write_text(json.dumps(record, indent=2) + "\n")
+    print(f"bench.plan_repair: {env} done ({time.perf_counter() - start:.0f} s in this call) -> {out}/; "
+          "render the docs with: python -m bench.render")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
