@@ -88,18 +88,31 @@ class Steps:
         return self.done[name]
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.paper", description=__doc__,
+def test_seed_args(module: str, doc: str, env_help: str, argv) -> argparse.Namespace:
+    """The flags of a bench command that trains on the test seeds and writes records."""
+    parser = argparse.ArgumentParser(prog=f"python -m {module}", description=doc,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", required=True, choices=ENVS, help="the env whose headline to regenerate")
-    parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "paper",
-                        help="where the training runs go (default: runs/paper)")
+    runs = module.removeprefix("bench.")
+    parser.add_argument("--env", required=True, choices=ENVS, help=env_help)
+    parser.add_argument("--runs", type=Path, default=ROOT / "runs" / runs,
+                        help=f"where the training runs go (default: runs/{runs})")
     parser.add_argument("--records", type=Path, default=RECORDS,
                         help="where the env's records go (default: docs/results)")
     parser.add_argument("--num-seeds", type=int, default=TEST_SEEDS[1],
                         help="test seeds from 200 (default: %(default)s; fewer only to try the command out)")
     parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
-    args = parser.parse_args(argv)
+    return parser.parse_args(argv)
+
+
+def command_line(module: str, args: argparse.Namespace) -> str:
+    """The command as a record shows it: the flags that differ from their defaults."""
+    return f"python -m {module} --env {args.env}" + "".join(
+        f" --{flag} {value}" for flag, value, default in (("num-seeds", args.num_seeds, TEST_SEEDS[1]),
+                                                          ("cycles", args.cycles, 100)) if value != default)
+
+
+def main(argv=None) -> int:
+    args = test_seed_args("bench.paper", __doc__, "the env whose headline to regenerate", argv)
     first, count = TEST_SEEDS[0], args.num_seeds
     seeds = ["--num-seeds", str(count), "--first-seed", str(first), "--cycles", str(args.cycles)]
     env, runs = args.env, args.runs.resolve()
@@ -127,9 +140,7 @@ def main(argv=None) -> int:
     shutil.copy(main_run / "sweep_novelties.csv", out / "sweep.csv")
     shutil.copy(main_run / "sweep_novelties.png", out / "sweep.png")
     shutil.copy(main_run / "curves.png", out / "figure.png")
-    record = {"env": env, "commit": git_commit(), "command": f"python -m bench.paper --env {env}" + "".join(
-                  f" --{flag} {value}" for flag, value, default in (("num-seeds", count, TEST_SEEDS[1]), ("cycles", args.cycles, 100))
-                  if value != default),
+    record = {"env": env, "commit": git_commit(), "command": command_line("bench.paper", args),
               "seeds": f"{first}-{first + count - 1}", "approaches": approaches,
               "config_version": json.loads((main_run / "ours" / "config.json").read_text())["config_version"],
               "test_protocols": {"main": protocols[0], "authors_preset": protocols[-1]},

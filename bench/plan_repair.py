@@ -14,15 +14,13 @@ run again (E-steps.json in the runs directory), and training resumes from its ch
 """
 from __future__ import annotations
 
-import argparse
 import json
 import shutil
 import sys
 import time
-from pathlib import Path
 
-from bench.paper import Steps, csv_text, results_rows, train_step
-from bench.records import ENVS, RECORDS, ROOT, TEST_SEEDS, git_commit, machine, run_child, shown
+from bench.paper import Steps, command_line, csv_text, results_rows, test_seed_args, train_step
+from bench.records import TEST_SEEDS, git_commit, machine, run_child, shown
 from jaxbridge.run.comparison import run_labels, write_comparison
 from jaxbridge.run.experiments import load_experiment
 
@@ -30,17 +28,7 @@ APPROACHES = "ours,plan_progress,plan_progress_replan"
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.plan_repair", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", required=True, choices=ENVS, help="the env to compare on")
-    parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "plan_repair",
-                        help="where the training runs go (default: runs/plan_repair)")
-    parser.add_argument("--records", type=Path, default=RECORDS,
-                        help="where the env's records go (default: docs/results)")
-    parser.add_argument("--num-seeds", type=int, default=TEST_SEEDS[1],
-                        help="test seeds from 200 (default: %(default)s; fewer only to try the command out)")
-    parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
-    args = parser.parse_args(argv)
+    args = test_seed_args("bench.plan_repair", __doc__, "the env to compare on", argv)
     first, count = TEST_SEEDS[0], args.num_seeds
     env, runs = args.env, args.runs.resolve()
     runs.mkdir(parents=True, exist_ok=True)
@@ -59,9 +47,7 @@ def main(argv=None) -> int:
     shutil.copy(run / "sweep_novelties.csv", out / "plan_repair_sweep.csv")
     shutil.copy(run / "sweep_novelties.png", out / "plan_repair_sweep.png")
     shutil.copy(run / "curves.png", out / "plan_repair.png")
-    record = {"env": env, "commit": git_commit(), "command": f"python -m bench.plan_repair --env {env}" + "".join(
-                  f" --{flag} {value}" for flag, value, default in (("num-seeds", count, TEST_SEEDS[1]), ("cycles", args.cycles, 100))
-                  if value != default),
+    record = {"env": env, "commit": git_commit(), "command": command_line("bench.plan_repair", args),
               "seeds": f"{first}-{first + count - 1}", "approaches": approaches,
               "steps": {"train": train, "sweep": sweep},
               "wall_s": round(train["wall_s"] + sweep["wall_s"], 1), "machine": machine()}
