@@ -220,7 +220,7 @@ def plan_repair(env: str) -> str:
              "over seeds, IQM [95% CI] beside it.", "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
     lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit "
-              f"{run['commit'][:10]}.", "",
+              f"{run['commit'][:10]}.", "", f"![{ENV_TITLES[env]}, plan repair](results/{env}/plan_repair.png)", "",
               novelty_table(env, read_csv(folder / "plan_repair_sweep.csv"), run["seeds"], run["steps"]["sweep"]["command"])]
     return "\n".join(lines)
 
