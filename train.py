@@ -70,8 +70,7 @@ def parse_args(argv):
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: the paper's figure for the env: "
                         f"the six, {', '.join(APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
-                        f"Doorknobs figure; by name only: the plan-repair baselines {', '.join(PLAN_REPAIR)} and the "
-                        f"low-level ones {', '.join(LOW_LEVEL)})")
+                        f"Doorknobs figure; by name only: {', '.join([*PLAN_REPAIR, *LOW_LEVEL])})")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,

@@ -10,7 +10,7 @@ import numpy as np
 
 from jaxbridge.commands.envs import load_env
 from jaxbridge.core.bridges import make_bridge
-from jaxbridge.core.meta_policy import Controls
+from jaxbridge.core.episode import Controls
 from jaxbridge.core.presets import default_test_protocol
 from jaxbridge.core.tasks import evaluation_specs, make_batch
 from jaxbridge.learn.approaches import KNOWN

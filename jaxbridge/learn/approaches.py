@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.bridges import Bridge, PurePlanningBridge, RandomBridge
-from jaxbridge.core.meta_policy import Controls, observation_size
+from jaxbridge.core.episode import Controls, observation_size
 from jaxbridge.learn.q_bridge import QBridge, QNetwork
 
 

@@ -13,7 +13,7 @@ import jax.numpy as jnp
 from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.meta_policy import Controls
+from jaxbridge.core.episode import Controls
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.dqn import DQN, Learner, init_learner, make_dqn

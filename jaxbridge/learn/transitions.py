@@ -15,7 +15,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from jaxbridge.core.meta_policy import StepRecord
+from jaxbridge.core.episode import StepRecord
 
 # The authors' plan-progress rewards (-1 per step, a large reward at a later plan state) scaled to ours'
 # reward of 1 at the end: a step costs 0.01, so a whole training episode (100 steps) costs as much as
