@@ -111,6 +111,14 @@ def command_line(module: str, args: argparse.Namespace) -> str:
                                                           ("cycles", args.cycles, 100)) if value != default)
 
 
+def write_record(path: Path, record: dict, start: float) -> int:
+    """Write a bench command's record and say what it did; its exit status."""
+    path.write_text(json.dumps(record, indent=2) + "\n")
+    print(f"{record['command']}: done ({time.perf_counter() - start:.0f} s in this call) -> {path.parent}/; "
+          "render the docs with: python -m bench.render")
+    return 0
+
+
 def main(argv=None) -> int:
     args = test_seed_args("bench.paper", __doc__, "the env whose headline to regenerate", argv)
     first, count = TEST_SEEDS[0], args.num_seeds
@@ -148,10 +156,7 @@ def main(argv=None) -> int:
                         "oracle": {"protocols": protocols, "wall_s": oracle["wall_s"]}, "sweep": sweep},
               "wall_s": round(sum(s["wall_s"] for s in (train, preset, sweep)) + oracle["wall_s"], 1),
               "machine": machine()}
-    (out / "run.json").write_text(json.dumps(record, indent=2) + "\n")
-    print(f"bench.paper: {env} done ({time.perf_counter() - start:.0f} s in this call) -> {out}/; "
-          "render the docs with: python -m bench.render")
-    return 0
+    return write_record(out / "run.json", record, start)
 
 
 if __name__ == "__main__":

@@ -14,12 +14,11 @@ run again (E-steps.json in the runs directory), and training resumes from its ch
 """
 from __future__ import annotations
 
-import json
 import shutil
 import sys
 import time
 
-from bench.paper import Steps, command_line, csv_text, results_rows, test_seed_args, train_step
+from bench.paper import Steps, command_line, csv_text, results_rows, test_seed_args, train_step, write_record
 from bench.records import TEST_SEEDS, git_commit, machine, run_child, shown
 from jaxbridge.run.comparison import run_labels, write_comparison
 from jaxbridge.run.experiments import load_experiment
@@ -51,10 +50,7 @@ def main(argv=None) -> int:
               "seeds": f"{first}-{first + count - 1}", "approaches": approaches,
               "steps": {"train": train, "sweep": sweep},
               "wall_s": round(train["wall_s"] + sweep["wall_s"], 1), "machine": machine()}
-    (out / "plan_repair.json").write_text(json.dumps(record, indent=2) + "\n")
-    print(f"bench.plan_repair: {env} done ({time.perf_counter() - start:.0f} s in this call) -> {out}/; "
-          "render the docs with: python -m bench.render")
-    return 0
+    return write_record(out / "plan_repair.json", record, start)
 
 
 if __name__ == "__main__":
