@@ -36,6 +36,11 @@ class Transition:
     steps: jax.Array | None = None  # int32: env steps it spans (with a step discount)
 
 
+def count_before(flags: jax.Array) -> jax.Array:
+    """int32[T + 1]: how many of flags[:t] are set, for every t (a difference of two is a count over a span)."""
+    return jnp.concatenate([jnp.zeros(1, jnp.int32), jnp.cumsum(flags.astype(jnp.int32))])
+
+
 def episode_transitions(records: StepRecord, success: jax.Array, call_planner_skill: int,
                         call_planner_bonus: float = 0.0, count_steps: bool = False, plan_progress: bool = False
                         ) -> tuple[Transition, jax.Array]:
@@ -54,11 +59,11 @@ def episode_transitions(records: StepRecord, success: jax.Array, call_planner_sk
     goal = ~has_next & success  # the episode ended at the goal during this transition
     bonus = jnp.where(records.skill == call_planner_skill, call_planner_bonus, 0.0)
     # The env steps from each decision to the next one (or to the episode's end).
-    live_before = jnp.concatenate([jnp.zeros(1, jnp.int32), jnp.cumsum(records.live.astype(jnp.int32))])
+    live_before = count_before(records.live)
     span = live_before[next_decision] - live_before[index]
     reward, done = jnp.where(goal, 1.0 + bonus, 0.0), ~has_next
-    if plan_progress:  # a hand-back in (t, next decision]; counted as the episode's steps are above
-        handed_back = jnp.concatenate([jnp.zeros(1, jnp.int32), jnp.cumsum(records.progressed.astype(jnp.int32))])
+    if plan_progress:  # a hand-back in (t, next decision]
+        handed_back = count_before(records.progressed)
         reached = handed_back[nxt + 1] > handed_back[index + 1]
         reward = jnp.where(reached | goal, 1.0, -PROGRESS_STEP_COST * span)
         done = done | reached
