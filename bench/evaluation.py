@@ -19,7 +19,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from envs_jax import registered
+from envs_jax import BUILTIN
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.run.evaluate import TrainedPolicy, load_policy
 from jaxbridge.learn.setup import make_setup
@@ -51,7 +51,7 @@ def measure(policy: TrainedPolicy, tasks: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--envs", default=",".join(registered()), help="comma-separated envs (default: %(default)s)")
+    parser.add_argument("--envs", default=",".join(BUILTIN), help="comma-separated envs (default: %(default)s)")
     parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
     parser.add_argument("--tasks", type=int, default=100, help="test tasks per seed (default: %(default)s)")
     parser.add_argument("--run", type=Path, default=None, help="time this run's checkpoint instead")

@@ -8,13 +8,13 @@ from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Brid
                            NoveltySweep, SkillCall, SkillSpec, TaskSpec)
 from envs_jax.coffee import Coffee
 from envs_jax.doorknobs import Doorknobs
-from envs_jax.light_switch_door import LightSwitchDoor
-from envs_jax.registry import BUILTIN, env_class, is_builtin, register, registered
+from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchPanel
+from envs_jax.registry import BUILTIN, VARIANTS, env_class, is_builtin, register, registered
 
-for _cls in (LightSwitchDoor, Doorknobs, Coffee):
+for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel):
     register(_cls.name, _cls)
-assert registered() == sorted(BUILTIN)
+assert registered() == sorted(BUILTIN + VARIANTS)
 
-__all__ = ["ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
-           "NoveltySweep", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee",
+__all__ = ["BUILTIN", "VARIANTS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
+           "NoveltySweep", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee", "LightSwitchPanel",
            "env_class", "is_builtin", "register", "registered"]

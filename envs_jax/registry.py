@@ -56,7 +56,8 @@ def env_class(spec: str) -> type[NoveltyEnv]:
 
 def is_builtin(spec: str) -> bool:
     """A name this package registers itself (checked by its own tests, not at every run)."""
-    return spec in BUILTIN
+    return spec in BUILTIN + VARIANTS
 
 
-BUILTIN = ("light_switch_door", "doorknobs", "coffee")
+BUILTIN = ("light_switch_door", "doorknobs", "coffee")  # the paper's envs
+VARIANTS = ("light_switch_panel",)  # ours, built to test one argument (docs/DESIGN.md says which)

@@ -1,6 +1,7 @@
 """The plan-repair baselines (issue 38) on a hand-made Light Switch Door row: the bridge's reward fires
 exactly when the abstract state reaches a later state of the plan it got stuck in, and the test-time
-meta-policy then resumes that plan at the right step (or replans)."""
+meta-policy then resumes that plan at the right step (or replans); and the variant built to test
+commitment to the plan, Light Switch Panel."""
 from dataclasses import dataclass
 
 import jax
@@ -8,8 +9,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from envs_jax import env_class
 from envs_jax.base import BridgeAction
-from envs_jax.light_switch_door.env import LightSwitchDoor, LightSwitchDoorTask
+from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchDoorTask, LightSwitchPanel
+from jaxbridge import check_env
+from jaxbridge.core.check_env import OracleBridge
 from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_PLANNER, rollout
 from jaxbridge.core.tasks import make_batch
 from jaxbridge.learn.approaches import get_approach
@@ -74,3 +78,44 @@ def test_the_reward_is_a_cost_per_step_until_the_decision_that_reaches_the_plan_
     assert reward[-1] == 1.0 and done[-1] and not done[:-1].any()  # the last decision moved it into cell 2
     spans = np.diff(decided)  # each earlier decision's skill takes its steps until the next decision
     np.testing.assert_allclose(reward[:-1], -PROGRESS_STEP_COST * spans)
+
+
+# ---- the variant: Light Switch Panel, each door's keys one cell before it ------------------------------
+PANEL_TASK = LightSwitchDoorTask(num_cells=6, door_cells=(2,), panel_offset=1)  # stuck in cell 2, keys in cell 1
+
+
+def test_the_panel_variant_keeps_the_env_contract_and_its_keys_turn_only_on_the_panel():
+    assert check_env(LightSwitchPanel) is LightSwitchPanel  # the oracle solves its test tasks, among the rest
+    env = LightSwitchPanel.for_tasks([PANEL_TASK])
+    state = env.reset(env.task_arrays(PANEL_TASK))
+    step = jax.jit(env.step)
+    set_keys = jnp.array([0.0, 0.0, 0.5, 0.75], jnp.float32)
+    at_door = step(state.replace(robot_x=jnp.float32(2.5)), set_keys)
+    assert not env.door_open(at_door)[0] and float(step(at_door, jnp.array([1.0, 0, 0, 0])).robot_x) == 2.5
+    on_panel = step(state.replace(robot_x=jnp.float32(1.5)), set_keys)
+    assert env.door_open(on_panel)[0]
+    through = step(step(on_panel, jnp.array([1.0, 0, 0, 0])), jnp.array([1.0, 0, 0, 0]))
+    assert float(through.robot_x) == 3.5
+    for name, cls in (("light_switch_panel", LightSwitchPanel), ("light_switch_door", LightSwitchDoor)):
+        doors = [t.door_cells for seed in range(8) for t in env_class(name).test_tasks(seed, 4)]
+        adjacent = [d for d in doors if np.any(np.diff(sorted(d)) < 2)]
+        assert (not adjacent) == (cls.panel_offset == 1)  # no panel shares a cell with a door; cell 0 holds none
+        assert (min(min(d) for d in doors) >= 1) == (cls.panel_offset == 1)
+
+
+def test_on_the_panel_variant_plan_progress_hands_back_past_the_door_and_ours_at_the_panel():
+    batch = make_batch(LightSwitchPanel, [PANEL_TASK] * 4, [0] * 4)
+    env, keys = batch.env, jax.random.split(jax.random.key(5), 4)
+    runs = {name: jax.tree.map(np.asarray, rollout(env, bridge, None, batch.arrays, keys, batch.max_steps, record=True,
+                                                   controls=get_approach(name).controls))
+            for name, bridge in (("plan_progress", KeysThenMove(env)), ("ours", OracleBridge(env)))}
+    result, rec = runs["ours"]
+    assert result.success.all() and not rec.progressed.any()
+    for b in range(4):  # ours hands back on the panel: cell 1, a state the plan had already passed
+        back = np.flatnonzero(rec.live[:, b] & (rec.actor[:, b] != ACTOR_PLANNER)).max() + 1
+        assert np.floor(rec.env_state.robot_x[back, b]) == 1 and rec.actor[back, b] == ACTOR_PLANNER
+    # plan_progress hands back only past the door (cell 3), after a walk whose direction it does not choose
+    result, rec = runs["plan_progress"]
+    handed_back = rec.progressed.any(axis=0)
+    assert handed_back.any() and (handed_back == result.success).all()
+    assert (np.floor(rec.env_state.robot_x[rec.progressed]) == 3).all()

@@ -1,4 +1,5 @@
 """Light Switch Door: a row of cells, a light at the end, doors with two keys (reference/envs.md §2)."""
 from envs_jax.light_switch_door.env import LightSwitchDoor, LightSwitchDoorTask
+from envs_jax.light_switch_door.panel import LightSwitchPanel
 
-__all__ = ["LightSwitchDoor", "LightSwitchDoorTask"]
+__all__ = ["LightSwitchDoor", "LightSwitchDoorTask", "LightSwitchPanel"]

@@ -40,25 +40,32 @@ class LightSwitchDoorTask:
     num_cells: int
     door_cells: tuple[int, ...]
     fixed_horizon: int | None = None  # the authors' code's fixed test horizon, instead of the paper's rule
+    panel_offset: int = 0  # each door's keys are this many cells before it (0: in its own cell, the paper's)
 
     def describe(self) -> str:
-        return f"{self.num_cells} cells, {len(self.door_cells)} doors"
+        panels = f", keys {self.panel_offset} cell(s) back" if self.panel_offset else ""
+        return f"{self.num_cells} cells, {len(self.door_cells)} doors{panels}"
 
     @property
     def shortest_solution(self) -> int:
-        """h: (N-1) moves + 1 light + 4 per door (blocked move, MoveKey, TurnKey, CallPlanner)."""
-        return (self.num_cells - 1) + 1 + 4 * len(self.door_cells)
+        """h: (N-1) moves + 1 light + 4 per door (blocked move, MoveKey, TurnKey, CallPlanner), and per
+        door with its keys k cells back, k moves back to them and k forward again."""
+        return (self.num_cells - 1) + 1 + (4 + 2 * self.panel_offset) * len(self.door_cells)
 
     @property
     def min_steps(self) -> int:
         """No action sequence reaches the goal in fewer env steps: N-1 moves, the light, and one step per
-        door that sets both its keys (skills take two, and the planner bumps into the first door)."""
+        door that sets both its keys (skills take two, and the planner bumps into the first door; keys
+        on a panel can be set in passing)."""
         return (self.num_cells - 1) + 1 + len(self.door_cells)
 
     @property
     def horizon(self) -> int:
-        """The paper's test horizon max(30, h + 5), or the authors' code's fixed 30 (`fixed_horizon`)."""
-        return self.fixed_horizon or max(30, self.shortest_solution + 5)
+        """The paper's test horizon max(30, h + 5), or the authors' code's fixed 30 (`fixed_horizon`). Keys
+        on panels add 4 steps per door: the walk back is a MoveRobot whose direction is drawn, and each
+        draw of "right" bumps into the closed door (one such bump per door on average)."""
+        slack = 5 + (4 * len(self.door_cells) if self.panel_offset else 0)
+        return self.fixed_horizon or max(30, self.shortest_solution + slack)
 
 
 def train_task(seed: int) -> LightSwitchDoorTask:
@@ -104,6 +111,7 @@ class Task:
 
     num_cells: jax.Array  # int32
     door_cell: jax.Array  # int32[D]; -1 marks padding
+    keys_cell: jax.Array  # int32[D]: the cell where each door's keys turn (its own, or a panel's); -1 padding
     key_target: jax.Array  # float32[D, 2]: each door's (move, turn) targets
     key_window: ExactWindow  # [D, 2]: the keys within DOOR_TOLERANCE of their targets
     light_target: jax.Array  # float32
@@ -159,6 +167,7 @@ class LightSwitchDoor(NoveltyEnv):
     max_doors: int = 4
 
     name = "light_switch_door"
+    panel_offset = 0  # each door's keys turn in its own cell (the panel variant: envs_jax.light_switch_door.panel)
     skills = (SkillSpec("MoveRobot"), SkillSpec("TurnOnLight", 0.75, 0.75),
               SkillSpec("TurnOffLight", 0.75, 0.75), SkillSpec("MoveKey", -1.0, 1.0),
               SkillSpec("TurnKey", -1.0, 1.0))
@@ -197,8 +206,9 @@ class LightSwitchDoor(NoveltyEnv):
             raise ValueError(f"task {spec} exceeds capacity {self}")
         doors = np.full(self.max_doors, -1, np.int32)
         doors[: len(spec.door_cells)] = spec.door_cells
+        keys_cell = np.where(doors >= 0, doors - spec.panel_offset, -1).astype(np.int32)
         key_target = np.tile(np.array([MOVE_TARGET, TURN_TARGET], np.float32), (self.max_doors, 1))
-        return Task(num_cells=np.int32(spec.num_cells), door_cell=doors, key_target=key_target,
+        return Task(num_cells=np.int32(spec.num_cells), door_cell=doors, keys_cell=keys_cell, key_target=key_target,
                     key_window=exact_window(key_target, DOOR_TOLERANCE), light_target=np.float32(LIGHT_TARGET))
 
     def planner_problem(self, spec: LightSwitchDoorTask) -> Problem:
@@ -241,10 +251,9 @@ class LightSwitchDoor(NoveltyEnv):
     def _cell_centres(self) -> jax.Array:
         return jnp.arange(self.max_cells, dtype=jnp.float32) + 0.5
 
-    def _doors_here(self, state: State) -> jax.Array:
-        """bool[D]: the doors in the robot's cell."""
-        door_x = state.task.door_cell.astype(jnp.float32) + 0.5
-        return (state.task.door_cell >= 0) & (jnp.abs(door_x - state.robot_x) < CELL_TOLERANCE)
+    def _here(self, state: State, cells: jax.Array) -> jax.Array:
+        """bool[D]: which of the doors' `cells` (door_cell or keys_cell) is the robot's cell."""
+        return (cells >= 0) & (jnp.abs(cells.astype(jnp.float32) + 0.5 - state.robot_x) < CELL_TOLERANCE)
 
     def door_open(self, state: State) -> jax.Array:
         """bool[D]: both keys within the inclusive tolerance of their targets."""
@@ -256,17 +265,16 @@ class LightSwitchDoor(NoveltyEnv):
     def step(self, state: State, action: jax.Array) -> State:
         """All rules read the pre-step state (envs.md §2.3)."""
         dx, dlight, dkeys = action[0], action[1], action[2:]  # dkeys: (dmove, dturn)
-        here = self._doors_here(state)
-        closed_here = here & ~self.door_open(state)
-        # Doors: keys of a closed door in the robot's cell accumulate and clip; open doors are frozen.
-        keys = state.keys.add_clipped(dkeys, where=closed_here[:, None])
+        closed = ~self.door_open(state)
+        # Doors: keys of a closed door turn in their cell (the door's) and clip; open doors are frozen.
+        keys = state.keys.add_clipped(dkeys, where=(self._here(state, state.task.keys_cell) & closed)[:, None])
         # Light: only dlight == 0.75 exactly, only in the light's cell, only while off.
         light_x = state.task.num_cells.astype(jnp.float32) - 0.5
         switch = ((jnp.abs(state.robot_x - light_x) < CELL_TOLERANCE) & (dlight == LIGHT_SWITCH_VALUE)
                   & ~self._light_on(state))
         light_level = jnp.where(switch, LIGHT_SWITCH_VALUE, state.light_level)
         # Move: a closed door blocks leaving its cell to the right (dx < 0 always may move).
-        blocked = jnp.any(closed_here) & ~(dx < 0)
+        blocked = jnp.any(self._here(state, state.task.door_cell) & closed) & ~(dx < 0)
         moved = jnp.clip(state.robot_x + dx, 0.0, state.task.num_cells.astype(jnp.float32))
         return state.replace(robot_x=jnp.where(blocked, state.robot_x, moved), light_level=light_level,
                              keys=keys)
@@ -287,8 +295,8 @@ class LightSwitchDoor(NoveltyEnv):
         return jnp.concatenate([jnp.stack([state.robot_x, state.light_level]), keys])
 
     def features(self, state: State, stuck_state: State) -> jax.Array:
-        """envs.md §2.7: the door in the robot's cell (keys and targets) and a flag; zeros if none."""
-        here = self._doors_here(state)
+        """envs.md §2.7: the keys in the robot's cell (keys and targets) and a flag; zeros if none."""
+        here = self._here(state, state.task.keys_cell)
         d = jnp.argmax(here)
         has = jnp.any(here)
         door = self._keys_and_targets(state)[d]
@@ -348,12 +356,14 @@ class LightSwitchDoor(NoveltyEnv):
 
     # ---- the hand-written bridge used as an oracle in tests and eval ----------------------------
     def oracle_bridge(self, params, obs, key):
-        """Set the door's keys exactly to their targets, then CallPlanner."""
+        """Set the keys here exactly to their targets, then CallPlanner; with no keys here and the keys on
+        panels (`panel_offset`), move (MoveRobot's grounding picks left or right) until some are."""
         has, move_key, move_target, turn_key, turn_target = (obs.features[i] for i in range(5))
         move_off = (has > 0.5) & (jnp.abs(move_key - move_target) > DOOR_TOLERANCE)
         turn_off = (has > 0.5) & (jnp.abs(turn_key - turn_target) > DOOR_TOLERANCE)
         call_planner = self.num_skills
+        no_keys = self.skill_index("MoveRobot") if self.panel_offset else call_planner
         skill = jnp.where(move_off, self.skill_index("MoveKey"),
-                          jnp.where(turn_off, self.skill_index("TurnKey"), call_planner))
+                          jnp.where(turn_off, self.skill_index("TurnKey"), jnp.where(has > 0.5, call_planner, no_keys)))
         param = jnp.where(move_off, move_target - move_key, turn_target - turn_key)
         return BridgeAction(skill=jnp.int32(skill), param=jnp.float32(param))
