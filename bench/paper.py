@@ -88,12 +88,12 @@ class Steps:
         return self.done[name]
 
 
-def test_seed_args(module: str, doc: str, env_help: str, argv) -> argparse.Namespace:
+def test_seed_args(module: str, doc: str, env_help: str, argv, envs: tuple[str, ...] = ENVS) -> argparse.Namespace:
     """The flags of a bench command that trains on the test seeds and writes records."""
     parser = argparse.ArgumentParser(prog=f"python -m {module}", description=doc,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     runs = module.removeprefix("bench.")
-    parser.add_argument("--env", required=True, choices=ENVS, help=env_help)
+    parser.add_argument("--env", required=True, choices=envs, help=env_help)
     parser.add_argument("--runs", type=Path, default=ROOT / "runs" / runs,
                         help=f"where the training runs go (default: runs/{runs})")
     parser.add_argument("--records", type=Path, default=RECORDS,

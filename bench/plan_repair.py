@@ -3,6 +3,7 @@
 plan_progress_replan: the same reward, then the planner replans), written as committed records.
 
     python -m bench.plan_repair --env light_switch_door   # -> docs/results/light_switch_door/plan_repair*
+    python -m bench.plan_repair --env light_switch_panel  # the variant where committing to the plan is wrong
 
 Steps, each as a user runs it (child processes; wall time and peak memory recorded):
   1. train.py --env E --approaches ours,plan_progress,plan_progress_replan on the test seeds;
@@ -19,7 +20,8 @@ import sys
 import time
 
 from bench.paper import Steps, command_line, csv_text, results_rows, test_seed_args, train_step, write_record
-from bench.records import TEST_SEEDS, git_commit, machine, run_child, shown
+from bench.records import ENVS, TEST_SEEDS, git_commit, machine, run_child, shown
+from envs_jax import VARIANTS
 from jaxbridge.run.comparison import run_labels, write_comparison
 from jaxbridge.run.experiments import load_experiment
 
@@ -27,7 +29,8 @@ APPROACHES = "ours,plan_progress,plan_progress_replan"
 
 
 def main(argv=None) -> int:
-    args = test_seed_args("bench.plan_repair", __doc__, "the env to compare on", argv)
+    args = test_seed_args("bench.plan_repair", __doc__, "the env to compare on (light_switch_panel: the variant where "
+                          "committing to the plan is wrong)", argv, ENVS + VARIANTS)
     first, count = TEST_SEEDS[0], args.num_seeds
     env, runs = args.env, args.runs.resolve()
     runs.mkdir(parents=True, exist_ok=True)

@@ -9,11 +9,12 @@ from pathlib import Path
 import numpy as np
 
 from bench.records import ENVS, RECORDS
-from envs_jax import env_class
+from envs_jax import VARIANTS, env_class
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.utils import stats
 
-ENV_TITLES = {"light_switch_door": "Light Switch Door", "doorknobs": "Doorknobs", "coffee": "Coffee"}
+ENV_TITLES = {"light_switch_door": "Light Switch Door", "doorknobs": "Doorknobs", "coffee": "Coffee",
+              "light_switch_panel": "Light Switch Panel"}
 PRESET_RUN = "ours_authors_preset"  # the records' name for ours with --preset authors (bench.paper)
 CYCLES = (10, 25, 50, 100)
 
@@ -227,6 +228,6 @@ def plan_repair(env: str) -> str:
 
 BLOCKS = {**{f"headline {env}": (lambda env=env: headline(env)) for env in ENVS},
           **{f"sweep {env}": (lambda env=env: sweep_table(env)) for env in ENVS},
-          **{f"plan repair {env}": (lambda env=env: plan_repair(env)) for env in ENVS}}
+          **{f"plan repair {env}": (lambda env=env: plan_repair(env)) for env in ENVS + VARIANTS}}
 
 

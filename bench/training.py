@@ -1,7 +1,7 @@
 """Wall-clock of the paper's protocol for our method: 8 seeds x 100 cycles, seeds over every device.
 
     python -m bench.training [--env doorknobs] [--num-seeds 8] [--cycles 100] [--devices auto|N]
-                             [--seed-block 1] [--approach ours]
+                             [--seed-block 1] [--approach ours[,plan_progress,...]]
 
 Prints the time to build tasks and plans, the first cycle (mostly compilation), the steady-state
 seconds per cycle, the total, and the ratio to the authors' run time of one seed (results.md: Light
@@ -76,6 +76,23 @@ def with_overrides(config: TrainConfig, overrides: list[tuple[str, object]]) -> 
     return dataclasses.replace(config, **changes), changes
 
 
+def report(config: TrainConfig, run: dict) -> float:
+    """Print one approach's times; returns its steady-state seconds per cycle."""
+    times, total = run["times"], run["total_s"]
+    steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
+    per_seed_run = total / config.num_seeds
+    print(f"{config.env}, {config.approach}: {config.num_seeds} seeds x {config.cycles} cycles, {config.updates_per_cycle} updates/cycle, "
+          f"batch {config.batch_size}")
+    print(f"tasks + plan tables: {run['build_s']:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "
+          f"steady state: {steady:.3f} s/cycle")
+    print(f"total: {total:.1f} s; final mean test solve rate {run['rates'][-1]:.2f}")
+    if config.env in AUTHORS_WHOLE_RUN_S:
+        authors = AUTHORS_WHOLE_RUN_S[config.env]
+        print(f"authors: {authors:,} s per seed-run; ours: {per_seed_run:.1f} s per seed-run "
+              f"-> {authors / per_seed_run:,.0f}x")
+    return steady
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
@@ -83,26 +100,22 @@ def main() -> None:
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
-    parser.add_argument("--approach", default="ours", help="which approach (default: %(default)s)")
+    parser.add_argument("--approach", default="ours", help="which approach, or a comma-separated list measured one "
+                        "after the other, each one's steady-state cost then given as a ratio to the first's "
+                        "(default: %(default)s)")
     parser.add_argument("overrides", nargs="*", type=config_override,
                         help="TrainConfig fields as name=value, e.g. feature_noise=0")
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
-    config, _ = with_overrides(TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles,
-                                                   seed_block=args.seed_block, approach=args.approach), args.overrides)
-    run = measure_cycles(config, seeds_over)
-    times, total = run["times"], run["total_s"]
-    steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
-    per_seed_run = total / config.num_seeds
-    print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s), seed block {config.seed_block}")
-    print(f"{config.env}, {config.approach}: {config.num_seeds} seeds x {config.cycles} cycles, {config.updates_per_cycle} updates/cycle, "
-          f"batch {config.batch_size}")
-    print(f"tasks + plan tables: {run['build_s']:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "
-          f"steady state: {steady:.3f} s/cycle")
-    print(f"total: {total:.1f} s; final mean test solve rate {run['rates'][-1]:.2f}")
-    authors = AUTHORS_WHOLE_RUN_S[config.env]
-    print(f"authors: {authors:,} s per seed-run; ours: {per_seed_run:.1f} s per seed-run "
-          f"-> {authors / per_seed_run:,.0f}x")
+    print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s), seed block {args.seed_block}")
+    steady = {}
+    for approach in args.approach.split(","):
+        config, _ = with_overrides(TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles,
+                                                       seed_block=args.seed_block, approach=approach), args.overrides)
+        steady[approach] = report(config, measure_cycles(config, seeds_over))
+    first = next(iter(steady))
+    for approach, seconds in list(steady.items())[1:]:
+        print(f"{approach}: {seconds / steady[first]:.2f}x {first}'s steady-state seconds per cycle")
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 exactly when the abstract state reaches a later state of the plan it got stuck in, and the test-time
 meta-policy then resumes that plan at the right step (or replans); and the variant built to test
 commitment to the plan, Light Switch Panel."""
+import csv
 from dataclasses import dataclass
 
 import jax
@@ -16,7 +17,12 @@ from jaxbridge import check_env
 from jaxbridge.core.check_env import OracleBridge
 from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_PLANNER, rollout
 from jaxbridge.core.tasks import make_batch
+from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.approaches import get_approach
+from jaxbridge.learn.setup import make_setup
+from jaxbridge.run import rundir
+from jaxbridge.run.evaluate import evaluate_run
+from jaxbridge.run.runner import train
 from jaxbridge.learn.transitions import PROGRESS_STEP_COST, episode_transitions
 
 TASK = LightSwitchDoorTask(num_cells=6, door_cells=(1,))  # the plan: cells 0 -> 5, then the light
@@ -119,3 +125,32 @@ def test_on_the_panel_variant_plan_progress_hands_back_past_the_door_and_ours_at
     handed_back = rec.progressed.any(axis=0)
     assert handed_back.any() and (handed_back == result.success).all()
     assert (np.floor(rec.env_state.robot_x[rec.progressed]) == 3).all()
+
+
+class Crash(Exception):
+    pass
+
+
+def test_a_plan_repair_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test_rate(tmp_path):
+    config = TrainConfig(approach="plan_progress", num_seeds=1, cycles=3, updates_per_cycle=10, checkpoint_every=1,
+                         num_test_tasks=2)
+    setup = make_setup(config)
+    for name in ("whole", "crashed"):
+        rundir.prepare(tmp_path / name, overwrite=False)
+    train(setup, tmp_path / "whole", progress=False)
+
+    def crash_before_cycle_3(cycle, learners):
+        if cycle == 3:
+            raise Crash
+        return learners
+
+    with pytest.raises(Crash):
+        train(setup, tmp_path / "crashed", progress=False, fault_injection=crash_before_cycle_3)
+    train(setup, tmp_path / "crashed", progress=False, resume=True)
+    whole = (tmp_path / "whole" / "metrics.csv").read_bytes()
+    assert (tmp_path / "crashed" / "metrics.csv").read_bytes() == whole and whole.count(b"\n") == 4
+    # evaluation (eval.py's) rebuilds the approach's meta-policy, resuming the stuck plan, and finds the last test rate
+    _, step, _, result, (_, _, controls) = evaluate_run(tmp_path / "crashed")
+    assert step == 3 and controls == setup.controls and controls.plan_progress and controls.resume_plan
+    last = list(csv.DictReader((tmp_path / "whole" / "metrics.csv").open()))[-1]
+    assert np.mean(result.success) == float(last["test_solve_rate"]) and (np.asarray(result.planner_calls) == 1).all()
