@@ -4,8 +4,15 @@ Floors, each importing only those below it (docs/DESIGN.md): `utils` (files, the
 plumbing, the compile cache) < `core` (config, the meta-policy, bridges, task batches, `check_env`) <
 `learn` (Q-network, double DQN, replay, approaches, the resolved `Setup`, the jitted cycle) < `run`
 (training loop, experiments, checkpoints, run files, evaluation, sweeps) < `viz` (episode pictures) <
-`commands` (what train.py and eval.py call). The envs (`envs_jax`) and the planner (`planner`) sit below.
+`api` (the Python API below) < `commands` (what train.py and eval.py call). The envs (`envs_jax`) and
+the planner (`planner`) sit below.
+
+The Python API (jaxbridge/api.py, docs/API.md): `train`, `load` (a `Policy` to `evaluate` and `render`),
+`make_env`, `tasks`, `make_config`, `TrainConfig`, and `make_train`, a whole run as one pure function.
 """
+from jaxbridge.api import (Episodes, Experiment, Hyper, Policy, TrainConfig, TrainOutput, load, make_config, make_env,
+                           make_train, seed_keys, tasks, train)
 from jaxbridge.core.check_env import EnvContractError, check_env
 
-__all__ = ["EnvContractError", "check_env"]
+__all__ = ["EnvContractError", "Episodes", "Experiment", "Hyper", "Policy", "TrainConfig", "TrainOutput", "check_env",
+           "load", "make_config", "make_env", "make_train", "seed_keys", "tasks", "train"]

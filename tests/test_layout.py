@@ -5,7 +5,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 # Floors, lowest first: a module may import its own floor's modules and those of the floors below it.
 FLOORS = ("planner", "envs_jax", "jaxbridge.utils", "jaxbridge.core", "jaxbridge.learn", "jaxbridge.run",
-          "jaxbridge.viz", "jaxbridge.commands")
+          "jaxbridge.viz", "jaxbridge.api", "jaxbridge.commands")
 PACKAGES = ("planner", "envs_jax", "jaxbridge")
 MAX_LINES = 420
 

@@ -2,7 +2,10 @@
 code (reference/method.md §7) differ, and docs/DESIGN.md lists every departure."""
 from __future__ import annotations
 
+import ast
 import dataclasses
+import inspect
+import textwrap
 from dataclasses import dataclass
 
 # 2: `approach` (version 1 configs were all "ours" and still load); 3: `split_task_state` (older runs
@@ -222,3 +225,19 @@ class TrainConfig:
     @property
     def seeds(self) -> list[int]:
         return list(range(self.first_seed, self.first_seed + self.num_seeds))
+
+
+def _documented(cls: type) -> str:
+    """The class's docstring for help(): what it is, then every field with its default and the attribute
+    docstring written under it in the source (Python keeps those only in the source)."""
+    body = ast.parse(textwrap.dedent(inspect.getsource(cls))).body[0].body
+    docs = {a.target.id: inspect.cleandoc(b.value.value) for a, b in zip(body, body[1:])
+            if isinstance(a, ast.AnnAssign) and isinstance(b, ast.Expr) and isinstance(b.value, ast.Constant)}
+    fields = [f"{f.name} = {f.default!r}\n" + textwrap.indent(docs.get(f.name, ""), "    ")
+              for f in dataclasses.fields(cls)]
+    return ("A training run's settings (frozen): `TrainConfig.for_env(env, preset, **overrides)` resolves an env's "
+            "and a preset's values.\nEach field, its default, and where the paper or the authors' code differ:\n\n"
+            + "\n".join(fields))
+
+
+TrainConfig.__doc__ = _documented(TrainConfig)

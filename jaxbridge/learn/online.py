@@ -9,6 +9,7 @@ nothing inside a cycle touches the host.
 """
 from __future__ import annotations
 
+from functools import partial
 from typing import Callable
 
 import jax
@@ -20,7 +21,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import TaskArrays
 from jaxbridge.learn.devices import SeedMesh
-from jaxbridge.learn.dqn import Learner, epsilon, learn, stored_transitions
+from jaxbridge.learn.dqn import Learner, epsilon, init_learner, learn, stored_transitions
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.learn.replay import add
@@ -179,3 +180,64 @@ class Cycle:
         # Some episode needed the host planner: the same cycle again from the same state, with it (every
         # process sees the same gathered metrics, so all take this branch together).
         return self.run(learners, host_planner=True)
+
+
+@struct.dataclass
+class TrainOutput:
+    """What `make_train`'s function returns: every seed's final learner and every cycle's metrics."""
+
+    learners: Learner  # leading axis: seeds
+    metrics: CycleMetrics  # each field [seeds, cycles]
+
+
+def seed_keys(config: TrainConfig) -> jax.Array:
+    """The seeds' starting keys as a run of `config` uses them: seed s starts from jax.random.key(s)."""
+    return jnp.stack([jax.random.key(s) for s in config.seeds])
+
+
+def make_train(setup: Setup) -> Callable[..., TrainOutput]:
+    """The whole online-learning run of `setup` as one pure function (PureJaxRL's shape):
+    `train(keys, hyper=None) -> TrainOutput`, every cycle of every seed, no files and no host work.
+
+    `keys`: one per seed (`seed_keys(config)` gives a plain run's); `hyper`: the numeric hyperparameters
+    as leaves (default `Hyper.of(config)`). jit it, or vmap it over keys or over `Hyper` leaves: the runs
+    of a vmap go one after another. Each seed runs its cycles as a plain run's cycle does (the same
+    per-seed program, seeds one after another), so the metrics are the run's where no plan-table lookup
+    misses: the rollouts do not call the host planner, so a missed lookup leaves that episode unplanned,
+    and `metrics.table_misses` counts them."""
+    config = setup.config
+    if setup.approach.low_level:
+        raise ValueError(f"{config.approach}: the low-level baselines train with brax's own loop, not make_train")
+    seed_cycle = make_seed_cycle(setup, host_planner=False)
+    tasks = _by_seed((setup.train.arrays, setup.test.arrays), config.num_seeds)
+    init = jax.vmap(partial(init_learner, setup.dqn))
+
+    def one_seed(args):
+        learner, train_tasks, test_tasks, hyper = args
+
+        def cycle(learner, _):  # the barriers keep the per-seed program the one a plain run compiles
+            learner, inputs = jax.lax.optimization_barrier((learner, (train_tasks, test_tasks, hyper)))
+            return jax.lax.optimization_barrier(seed_cycle(learner, *inputs))
+
+        return jax.lax.scan(cycle, learner, None, length=config.cycles)
+
+    @jax.custom_batching.custom_vmap
+    def run(keys: jax.Array, hyper: Hyper) -> TrainOutput:
+        hypers = jax.tree.map(lambda x: jnp.broadcast_to(jnp.float32(x), (config.num_seeds,)), hyper)
+        learners, metrics = jax.lax.map(one_seed, (init(keys), *tasks, hypers))
+        return TrainOutput(learners=learners, metrics=metrics)
+
+    @run.def_vmap
+    def one_run_after_another(axis_size: int, in_batched: list, keys: jax.Array, hyper: Hyper):
+        # vmap over runs (keys, settings) runs them one after another, each by the plain run's program, as
+        # train.py --sweep does: batching their ops would let XLA sum in other orders, and a last-bit
+        # difference can flip a greedy choice cycles later.
+        keys, hyper = (jax.tree.map(lambda x, b: x if b else jnp.broadcast_to(x, (axis_size,) + x.shape), arg, batched)
+                       for arg, batched in zip((keys, hyper), in_batched))
+        out = jax.lax.map(lambda args: run(*args), (keys, hyper))
+        return out, jax.tree.map(lambda _: True, out)
+
+    def train(keys: jax.Array, hyper: Hyper | None = None) -> TrainOutput:
+        return run(keys, Hyper.of(config) if hyper is None else hyper)
+
+    return train

@@ -134,16 +134,28 @@ def load_policy(run_dir) -> TrainedPolicy:
 
 def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0, max_memory: int | None = None):
     """Greedy evaluation of a run's latest checkpoint on each seed's test tasks, or on tasks drawn by
-    `sized_specs(rng) -> spec` (num_tasks per seed, rng seeded from the seed; refused with TooBig if
-    their plan tables would exceed `max_memory` bytes or the memory available). Also returns the greedy
-    policy it ran, (bridge, per-episode params, controls), so an episode can be re-run and drawn."""
+    `sized_specs(rng) -> spec` (`policy_tasks`). Also returns the greedy policy it ran, (bridge,
+    per-episode params, controls), so an episode can be re-run and drawn."""
     policy = load_policy(run_dir)
-    config, env_cls = policy.config, policy.setup.env_cls
+    batch = policy_tasks(policy, sized_specs, num_tasks, max_memory)
+    bridge, greedy, controls = policy.on(batch)
+    result = run_bridge(batch, bridge, greedy, seed, controls)
+    return policy.config, policy.step, batch, result, (bridge, greedy, controls)
+
+
+def policy_tasks(policy: TrainedPolicy, sized_specs=None, num_tasks: int = 10, max_memory: int | None = None,
+                 seeds: list[int] | None = None) -> TaskBatch:
+    """The batch a policy is evaluated on: each of `seeds`' (default: the run's) test tasks, or
+    `num_tasks` per seed drawn by `sized_specs(rng) -> spec` (rng seeded from the seed; refused with
+    TooBig if their plan tables would exceed `max_memory` bytes or the memory available); with the
+    env's quirks as the run trained."""
+    config, env_cls = policy.config, policy.env_cls
+    seeds = config.seeds if seeds is None else seeds
     if sized_specs is None:
-        batch = evaluation_batch(env_cls, config.seeds, config.num_test_tasks, protocol=config.test_protocol)
+        batch = evaluation_batch(env_cls, seeds, config.num_test_tasks, protocol=config.test_protocol)
     else:
         specs, owners = [], []
-        for s in config.seeds:
+        for s in seeds:
             rng = np.random.default_rng(s + 20000)
             specs += [sized_specs(rng) for _ in range(num_tasks)]
             owners += [s] * num_tasks
@@ -151,10 +163,7 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0, 
         sweep = env_cls.novelty_sweep  # its horizon rule scales with the tasks' size
         batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None,
                            progress=SlowWork(f"{env_cls.name}: sized tasks and plan tables"))
-    batch = dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks))  # as the run trained
-    bridge, greedy, controls = policy.on(batch)
-    result = run_bridge(batch, bridge, greedy, seed, controls)
-    return config, policy.step, batch, result, (bridge, greedy, controls)
+    return dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks))
 
 
 def format_comparison(evaluations: dict[str, list[SeedSummary]]) -> str:
