@@ -85,3 +85,11 @@ def test_the_quickstart_example_trains_plots_loads_and_evaluates(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "quickstart.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "40-cell tasks" in proc.stdout and "test solve rate at cycle 3" in proc.stdout
+
+
+def test_docs_api_md_documents_every_public_name_and_help_explains_the_calls():
+    text = (ROOT / "docs" / "API.md").read_text()
+    assert [name for name in jaxbridge.__all__ if f"**`{name}" not in text and f"**`jaxbridge.{name}" not in text] == []
+    for name in jaxbridge.__all__:
+        assert getattr(jaxbridge, name).__doc__, name
+    assert "learning_rate = 0.001" in jaxbridge.TrainConfig.__doc__ and "Adam step size" in jaxbridge.TrainConfig.__doc__
