@@ -132,25 +132,25 @@ class Crash(Exception):
 
 
 def test_a_plan_repair_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test_rate(tmp_path):
-    config = TrainConfig(approach="plan_progress", num_seeds=1, cycles=3, updates_per_cycle=10, checkpoint_every=1,
+    config = TrainConfig(approach="plan_progress", num_seeds=1, cycles=2, updates_per_cycle=10, checkpoint_every=1,
                          num_test_tasks=2)
     setup = make_setup(config)
     for name in ("whole", "crashed"):
         rundir.prepare(tmp_path / name, overwrite=False)
     train(setup, tmp_path / "whole", progress=False)
 
-    def crash_before_cycle_3(cycle, learners):
-        if cycle == 3:
+    def crash_before_cycle_2(cycle, learners):
+        if cycle == 2:
             raise Crash
         return learners
 
     with pytest.raises(Crash):
-        train(setup, tmp_path / "crashed", progress=False, fault_injection=crash_before_cycle_3)
+        train(setup, tmp_path / "crashed", progress=False, fault_injection=crash_before_cycle_2)
     train(setup, tmp_path / "crashed", progress=False, resume=True)
     whole = (tmp_path / "whole" / "metrics.csv").read_bytes()
-    assert (tmp_path / "crashed" / "metrics.csv").read_bytes() == whole and whole.count(b"\n") == 4
+    assert (tmp_path / "crashed" / "metrics.csv").read_bytes() == whole and whole.count(b"\n") == 3
     # evaluation (eval.py's) rebuilds the approach's meta-policy, resuming the stuck plan, and finds the last test rate
     _, step, _, result, (_, _, controls) = evaluate_run(tmp_path / "crashed")
-    assert step == 3 and controls == setup.controls and controls.plan_progress and controls.resume_plan
+    assert step == 2 and controls == setup.controls and controls.plan_progress and controls.resume_plan
     last = list(csv.DictReader((tmp_path / "whole" / "metrics.csv").open()))[-1]
     assert np.mean(result.success) == float(last["test_solve_rate"]) and (np.asarray(result.planner_calls) == 1).all()
