@@ -43,8 +43,8 @@ def rss_mib() -> float:
 
 def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats: int) -> dict:
     """Every figure of one env, in this process (which should not have measured anything else)."""
-    from jaxbridge.learn.devices import describe, select_devices
-    devices = select_devices(devices_arg)
+    from jaxbridge.learn.devices import describe, device_count_arg, select_devices
+    devices = select_devices(device_count_arg(devices_arg))
     from jaxbridge.utils import compile_cache
     compile_cache.enable(False)
     import jax
@@ -114,7 +114,7 @@ def main(argv=None) -> int:
     parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     from jaxbridge.utils.cli import auto_or_positive_int
-    args.devices = auto_or_positive_int(args.devices)
+    auto_or_positive_int(args.devices)  # refuses a bad value; the text goes on to the child and the record
     quick = args.quick
     args.cycles = args.cycles or (2 if quick else 4)
     args.repeats = args.repeats or (5 if quick else 20)

@@ -22,7 +22,7 @@ from bench.training import measure_cycles
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import select_devices
 config = TrainConfig.for_env(sys.argv[2], approach=sys.argv[3], num_seeds=int(sys.argv[4]), cycles=2)
-run = measure_cycles(config, select_devices("auto"), 2)
+run = measure_cycles(config, select_devices(), 2)
 print(json.dumps({"first_cycle_s": run["times"][0], **run["first"].as_dict()}))
 """
 

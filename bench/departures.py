@@ -89,7 +89,7 @@ def main() -> None:
     parser.add_argument("--rows", default="all", help="departures to measure, comma-separated, or all (default: all)")
     parser.add_argument("--directions", default="minus,plus", help="minus, plus or both (default: %(default)s)")
     args = parser.parse_args()
-    devices = select_devices("auto")  # before JAX starts
+    devices = select_devices()  # before JAX starts
     table = rows(args.env)
     names = list(table) if args.rows == "all" else args.rows.split(",")
     unknown = [n for n in names if n not in table]

@@ -111,14 +111,16 @@ class Experiment:
 
 def train(env: str | type[NoveltyEnv] = "light_switch_door", approaches: str | Sequence[str] = "ours",
           seeds: int | Sequence[int] = 8, cycles: int = 100, out: str | Path | None = None, name: str | None = None,
-          progress: bool = False, **overrides) -> Experiment:
+          overwrite: bool = False, progress: bool = False, **overrides) -> Experiment:
     """Train approaches on an env as train.py does and return their metrics as arrays.
 
     `approaches`: a name or names (jaxbridge/learn/approaches.py: ours, no_callplanner, maple_q, ...);
     `seeds`: a count from 0 or consecutive seeds; `overrides`: any TrainConfig field (`help(TrainConfig)`),
     e.g. `preset="authors"`, `updates_per_cycle=500`. With `out`, the experiment directory `out/name`
-    (default name: the env's) is written as train.py writes it, and `load` and eval.py read it; without,
-    the run's files go to a temporary directory removed on return. `progress`: the progress bar on stderr.
+    (default name: the env's) is written as train.py writes it, and `load` and eval.py read it; an
+    existing one is refused (RunDirError) unless `overwrite` (a run of ours only, as train.py
+    --overwrite). Without `out`, the run's files go to a temporary directory removed on return.
+    `progress`: the progress bar on stderr.
 
         experiment = jaxbridge.train("doorknobs", approaches=["ours", "maple_q"], seeds=4, cycles=20)
         experiment.metrics["ours"]["test_solve_rate"].shape   # (4, 20)
@@ -132,8 +134,8 @@ def train(env: str | type[NoveltyEnv] = "light_switch_door", approaches: str | S
     base = make_config(env, seeds, cycles, approach=names[0], **overrides)
     with nullcontext(Path(out)) if out is not None else tempfile.TemporaryDirectory() as root:
         run_dir = Path(root) / (name or _env_class(env).name)
-        rundir.prepare(run_dir, overwrite=False)
-        summaries = train_approaches(base, names, run_dir, progress)
+        replaced = rundir.prepare(run_dir, overwrite)
+        summaries = train_approaches(base, names, run_dir, progress, replaced=replaced)
         metrics = {approach: _read_metrics(run_dir / approach / "metrics.csv", base) for approach in names}
     return Experiment(base, tuple(names), metrics, summaries, run_dir if out is not None else None)
 

@@ -49,3 +49,39 @@ def test_no_module_is_longer_than_about_400_lines():
     long = {name: n for name, path in modules() if (n := len(path.read_text().splitlines())) > MAX_LINES}
     long |= {p.name: n for p in (ROOT / "train.py", ROOT / "eval.py") if (n := len(p.read_text().splitlines())) > 150}
     assert not long, long
+
+
+# Where a string setting may be read as text: where it is resolved (a config's choices, presets, --sweep
+# values, CLI flags). Everywhere else a setting is a typed value (an enum member, a bool, None).
+RESOLUTION = {"jaxbridge.core.config", "jaxbridge.core.presets", "jaxbridge.core.grid", "jaxbridge.utils.cli"}
+
+
+def setting_names() -> set[str]:
+    import dataclasses
+
+    from jaxbridge.core.config import TrainConfig
+    from jaxbridge.learn.approaches import Approach
+    names = {f.name for f in dataclasses.fields(TrainConfig)} | {f.name for f in dataclasses.fields(Approach)}
+    return (names - {"name", "label", "description"}) | {"request"}  # request: --devices' value
+
+
+def compared_to_text(node: ast.Compare, settings: set[str]) -> str | None:
+    """The setting a comparison reads as text (`config.polyak_per == "update"`, `bridge in ("q", ...)`)."""
+    sides = [node.left, *node.comparators]
+    texts = [s for s in sides if isinstance(s, ast.Constant) and isinstance(s.value, str)
+             or isinstance(s, (ast.Tuple, ast.List, ast.Set)) and s.elts
+             and all(isinstance(e, ast.Constant) and isinstance(e.value, str) for e in s.elts)]
+    named = [s.attr if isinstance(s, ast.Attribute) else s.id for s in sides if isinstance(s, (ast.Attribute, ast.Name))]
+    hit = [n for n in named if n in settings]
+    return hit[0] if texts and hit else None
+
+
+def test_no_setting_is_compared_as_text_outside_where_it_is_resolved():
+    settings, found = setting_names(), []
+    for name, path in modules():
+        if not name.startswith("jaxbridge") or name in RESOLUTION:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Compare) and (setting := compared_to_text(node, settings)):
+                found.append(f"{name}:{node.lineno} compares {setting} with text")
+    assert not found, found

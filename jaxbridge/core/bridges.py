@@ -65,6 +65,6 @@ BRIDGES = {"oracle": OracleBridge, "random": RandomBridge, "none": PurePlanningB
 def make_bridge(name: str, env: NoveltyEnv) -> Bridge:
     if name not in BRIDGES:
         raise ValueError(f"unknown bridge {name!r}; choose from {', '.join(BRIDGES)}")
-    if name == "oracle" and not env.has_oracle:
+    if BRIDGES[name] is OracleBridge and not env.has_oracle:
         raise ValueError(f"env {env.name!r} has no oracle bridge")
     return BRIDGES[name](env)

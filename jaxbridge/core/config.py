@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import dataclasses
+import enum
 import inspect
 import textwrap
 from dataclasses import dataclass
@@ -37,10 +38,40 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
           "buffer_capacity": (1, None, True), "checkpoint_every": (1, None, True), "seed_block": (1, None, True),
           "first_seed": (0, None, True)}
 
-# The string options and what they may be.
-CHOICES = {"polyak_per": ("update", "decision"), "activation": ("leaky_relu", "relu"),
-           "target_init": ("copy", "apart"), "output_init": ("zero", "uniform"), "normalise": ("none", "minmax"),
-           "param_samples": ("stratified", "iid")}
+# The string options, resolved to these typed values when a config is made: each member equals its
+# string (config.json and --sweep keep the strings), and the code below compares members, not text.
+class PolyakPer(enum.StrEnum):
+    UPDATE = "update"
+    DECISION = "decision"
+
+
+class Activation(enum.StrEnum):
+    LEAKY_RELU = "leaky_relu"
+    RELU = "relu"
+
+
+class TargetInit(enum.StrEnum):
+    COPY = "copy"
+    APART = "apart"
+
+
+class OutputInit(enum.StrEnum):
+    ZERO = "zero"
+    UNIFORM = "uniform"
+
+
+class Normalise(enum.StrEnum):
+    NONE = "none"
+    MINMAX = "minmax"
+
+
+class ParamSamples(enum.StrEnum):
+    STRATIFIED = "stratified"
+    IID = "iid"
+
+
+CHOICES = {"polyak_per": PolyakPer, "activation": Activation, "target_init": TargetInit, "output_init": OutputInit,
+           "normalise": Normalise, "param_samples": ParamSamples}
 
 
 @dataclass(frozen=True)
@@ -48,8 +79,10 @@ class TrainConfig:
     env: str = "light_switch_door"
     """Environment name."""
     approach: str = "ours"
-    """Which of the paper's approaches (jaxbridge/learn/approaches.py): ours, no_feature_selection,
-    no_callplanner, random, pure_planning, maple_q."""
+    """Which approach (jaxbridge/learn/approaches.py): the paper's ours, no_feature_selection,
+    no_callplanner, random, pure_planning, maple_q; the plan-repair baselines plan_progress and
+    plan_progress_replan; the low-level (brax) baselines low_level_ppo and low_level_sac, each also
+    with _callplanner or _full_state."""
     preset: str = "jaxbridge"
     """The named set of values the run started from (jaxbridge/core/presets.py): jaxbridge (ours) or
     authors (the authors' code where ours differs); every resolved value is in this config."""
@@ -90,24 +123,24 @@ class TrainConfig:
     """Global gradient-norm clip (the paper: 5)."""
     polyak_tau: float = 0.0025
     """Target-network soft update step (the paper: 0.0025)."""
-    polyak_per: str = "update"
+    polyak_per: PolyakPer = PolyakPer.UPDATE
     """When the target takes a polyak step: after every minibatch "update" (ours), or per training bridge
     "decision" (the authors' code). docs/TUNING.md gives the comparison."""
     hidden_sizes: tuple[int, ...] = (32, 32)
     """Q-network hidden layers (the paper: [32, 32])."""
-    activation: str = "leaky_relu"
+    activation: Activation = Activation.LEAKY_RELU
     """Hidden units: "leaky_relu" (slope 0.01, ours: keeps units alive under mostly-zero targets) or
     "relu" (the authors')."""
-    output_init: str = "zero"
+    output_init: OutputInit = OutputInit.ZERO
     """The Q-network's output layer at the start: "zero" (ours: the untrained Q is 0 everywhere) or
     "uniform" as PyTorch's default nn.Linear, +-1/sqrt(fan_in) (the authors'; the hidden layers start
     so in both)."""
-    normalise: str = "none"
+    normalise: Normalise = Normalise.NONE
     """The Q-network's input and output scaling: "none" (ours: features and targets lie in small fixed
     ranges) or "minmax" (the authors'): every cycle, after relabelling, each input entry is shifted by
     its minimum over the replay buffer and divided by its range (at least 1), the targets likewise; the
     network fits the scaled targets and its output is scaled back. The target network shares the scaling."""
-    target_init: str = "copy"
+    target_init: TargetInit = TargetInit.COPY
     """The target network at the start: a "copy" of the online one (ours) or initialised "apart" from
     it (the authors'), then tracking it by polyak steps."""
     reset_optimizer: bool = False
@@ -121,7 +154,7 @@ class TrainConfig:
     n_sample: int = 100
     """Parameter samples per skill in the greedy argmax (the authors: 100 for Light Switch Door, 10 for
     Doorknobs and Coffee; ours: 100 everywhere)."""
-    param_samples: str = "stratified"
+    param_samples: ParamSamples = ParamSamples.STRATIFIED
     """How the n parameter samples of a skill in an argmax (greedy and TD targets) are drawn: "stratified"
     (ours: the j-th uniform in the j-th n-quantile of the range, so a narrow good interval is never
     missed by chance) or "iid" (the authors': independent uniforms)."""
@@ -171,9 +204,10 @@ class TrainConfig:
     """Save the learner state every this many cycles (and after the last one)."""
 
     def __post_init__(self):
-        for field, allowed in CHOICES.items():
-            if getattr(self, field) not in allowed:
-                raise ValueError(f"{field} must be one of {', '.join(allowed)}, got {getattr(self, field)!r}")
+        for field, choice in CHOICES.items():
+            if getattr(self, field) not in set(choice):
+                raise ValueError(f"{field} must be one of {', '.join(choice)}, got {getattr(self, field)!r}")
+            object.__setattr__(self, field, choice(getattr(self, field)))  # resolved once: a member from here on
         for field, (low, high, low_included) in RANGES.items():
             value = getattr(self, field)
             if value < low or (value == low and not low_included) or (high is not None and value > high):
@@ -233,7 +267,8 @@ def _documented(cls: type) -> str:
     body = ast.parse(textwrap.dedent(inspect.getsource(cls))).body[0].body
     docs = {a.target.id: inspect.cleandoc(b.value.value) for a, b in zip(body, body[1:])
             if isinstance(a, ast.AnnAssign) and isinstance(b, ast.Expr) and isinstance(b.value, ast.Constant)}
-    fields = [f"{f.name} = {f.default!r}\n" + textwrap.indent(docs.get(f.name, ""), "    ")
+    shown = lambda value: repr(value.value if isinstance(value, enum.Enum) else value)
+    fields = [f"{f.name} = {shown(f.default)}\n" + textwrap.indent(docs.get(f.name, ""), "    ")
               for f in dataclasses.fields(cls)]
     return ("A training run's settings (frozen): `TrainConfig.for_env(env, preset, **overrides)` resolves an env's "
             "and a preset's values.\nEach field, its default, and where the paper or the authors' code differ:\n\n"

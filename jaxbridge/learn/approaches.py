@@ -7,6 +7,7 @@ shared, so a difference in results is the approach's defining difference and not
 """
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
 
 from envs_jax.base import NoveltyEnv
@@ -15,32 +16,40 @@ from jaxbridge.core.episode import Controls, observation_size
 from jaxbridge.learn.q_bridge import QBridge, QNetwork
 
 
+class BridgeKind(enum.Enum):
+    """Which bridge acts when the plan is stuck."""
+
+    Q = "q"  # the learned Q bridge
+    RANDOM = "random"  # a uniformly random choice
+    NONE = "none"  # none: the planner re-plans
+    LOW_LEVEL = "low_level"  # a brax agent emitting raw actions (learn/low_level; trained by run/low_level_runs)
+
+
 @dataclass(frozen=True)
 class Approach:
     name: str
     label: str  # as in the paper's figures
-    bridge: str  # "q": the learned bridge; "random": uniformly random; "none": re-plan when stuck;
-    # "low_level": a brax agent emitting raw actions (learn/low_level; trained by run/low_level_runs)
+    bridge: BridgeKind
     controls: Controls = Controls()
     description: str = ""
     algorithm: str = ""  # the low-level baselines' brax trainer ("ppo" or "sac")
 
     @property
     def learns(self) -> bool:
-        return self.bridge in ("q", "low_level")
+        return self.bridge in (BridgeKind.Q, BridgeKind.LOW_LEVEL)
 
     @property
     def low_level(self) -> bool:
-        return self.bridge == "low_level"
+        return self.bridge is BridgeKind.LOW_LEVEL
 
     def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int,
                     explore_ground_operators: bool = False, stratified: bool = True) -> Bridge:
         """The approach's bridge (equal arguments give equal bridges: one compiled rollout serves them);
         `explore_ground_operators`: random draws over ground operators (RandomBridge); `stratified`: the
         greedy argmax's parameter samples (q_bridge.sample_candidates)."""
-        if self.bridge == "q":
+        if self.bridge is BridgeKind.Q:
             return QBridge(env, net, n_sample, explore_ground_operators, stratified)
-        if self.bridge == "random":
+        if self.bridge is BridgeKind.RANDOM:
             return RandomBridge(env, explore_ground_operators)
         return PurePlanningBridge(env)
 
@@ -50,17 +59,17 @@ class Approach:
 
 
 APPROACHES = {a.name: a for a in (
-    Approach("ours", "ours", "q", Controls(),
+    Approach("ours", "ours", BridgeKind.Q, Controls(),
              "bridge policy learning: object-centric features, CallPlanner"),
-    Approach("no_feature_selection", "no feature selection", "q", Controls(full_state=True),
+    Approach("no_feature_selection", "no feature selection", BridgeKind.Q, Controls(full_state=True),
              "the bridge sees every object's raw features, padded to the env's largest task"),
-    Approach("no_callplanner", "no CallPlanner", "q", Controls(call_planner=False),
+    Approach("no_callplanner", "no CallPlanner", BridgeKind.Q, Controls(call_planner=False),
              "no CallPlanner action: once stuck, the bridge keeps control for the episode"),
-    Approach("random", "random bridge", "random", Controls(),
+    Approach("random", "random bridge", BridgeKind.RANDOM, Controls(),
              "a uniformly random applicable action (CallPlanner included) whenever stuck; no learning"),
-    Approach("pure_planning", "pure planning", "none", Controls(),
+    Approach("pure_planning", "pure planning", BridgeKind.NONE, Controls(),
              "the planner alone, re-planning whenever stuck; no learning"),
-    Approach("maple_q", "Maple Q (pure RL)", "q", Controls(planner=False, call_planner=False, full_state=True),
+    Approach("maple_q", "Maple Q (pure RL)", BridgeKind.Q, Controls(planner=False, call_planner=False, full_state=True),
              "pure RL, no planner: full state, actions grounded on each task's objects"),
 )}
 
@@ -69,7 +78,7 @@ APPROACHES = {a.name: a for a in (
 # state with brax's agents on ours' features; variants add a CallPlanner action dimension, or see the
 # full state instead. Not among "all".
 LOW_LEVEL = {a.name: a for a in (
-    Approach(f"low_level_{algorithm}{suffix}", f"low-level {algorithm.upper()}{label}", "low_level",
+    Approach(f"low_level_{algorithm}{suffix}", f"low-level {algorithm.upper()}{label}", BridgeKind.LOW_LEVEL,
              Controls(call_planner=suffix == "_callplanner", full_state=suffix == "_full_state", low_level=True),
              f"brax {algorithm.upper()} from the stuck state on the env's raw actions{what}", algorithm)
     for algorithm in ("ppo", "sac")
@@ -82,9 +91,9 @@ LOW_LEVEL = {a.name: a for a in (
 # state of that plan, which ends its problem), with no CallPlanner; then the plan resumes from the
 # state reached, or the planner replans. Not among "all".
 PLAN_REPAIR = {a.name: a for a in (
-    Approach("plan_progress", "plan progress", "q", Controls(call_planner=False, plan_progress=True, resume_plan=True),
+    Approach("plan_progress", "plan progress", BridgeKind.Q, Controls(call_planner=False, plan_progress=True, resume_plan=True),
              "rewarded for reaching a later state of the stuck plan, which then resumes there; no CallPlanner"),
-    Approach("plan_progress_replan", "plan progress, replanning", "q",
+    Approach("plan_progress_replan", "plan progress, replanning", BridgeKind.Q,
              Controls(call_planner=False, plan_progress=True),
              "rewarded for reaching a later state of the stuck plan; then the planner replans; no CallPlanner"),
 )}

@@ -24,8 +24,8 @@ AXIS = "seeds"
 CPU_FLAG = "xla_force_host_platform_device_count"
 
 
-def device_count_arg(text: str) -> str | int:
-    """argparse type of --devices: "auto" or a positive integer."""
+def device_count_arg(text: str) -> int | None:
+    """argparse type of --devices: a positive integer, or None for "auto" (every device)."""
     from jaxbridge.utils.cli import auto_or_positive_int
     return auto_or_positive_int(text)
 
@@ -45,15 +45,15 @@ def _backend_started() -> bool:
         return True  # cannot tell: do not touch the config
 
 
-def configure_cpu_devices(request: str | int = "auto") -> None:
-    """On CPU, the virtual device count (`auto`: one per core), if the backend has not started yet and
-    XLA_FLAGS does not set it; nothing otherwise."""
+def configure_cpu_devices(request: int | None = None) -> None:
+    """On CPU, the virtual device count (None, "auto": one per core), if the backend has not started yet
+    and XLA_FLAGS does not set it; nothing otherwise."""
     if not _backend_started() and CPU_FLAG not in os.environ.get("XLA_FLAGS", ""):
-        jax.config.update("jax_num_cpu_devices", cpu_cores() if request == "auto" else int(request))
+        jax.config.update("jax_num_cpu_devices", cpu_cores() if request is None else int(request))
 
 
-def select_devices(request: str | int = "auto") -> list:
-    """The local devices to shard the seeds over: `auto` = all of them, else the first `request`.
+def select_devices(request: int | None = None) -> list:
+    """The local devices to shard the seeds over: None ("auto") = all of them, else the first `request`.
 
     On CPU, JAX has one device unless told otherwise before its backend starts: this sets
     `jax_num_cpu_devices` (auto: one per core) if the backend has not started yet and XLA_FLAGS does
@@ -63,12 +63,12 @@ def select_devices(request: str | int = "auto") -> list:
     configure_cpu_devices(request)
     devices = jax.local_devices()
     if multi_process():
-        per_process = len(devices) if request == "auto" else request
+        per_process = len(devices) if request is None else request
         if per_process > len(devices):
             raise ValueError(f"--devices {request}: process {jax.process_index()} has only {len(devices)} device(s)")
         of = lambda p: sorted((d for d in jax.devices() if d.process_index == p), key=lambda d: d.id)
         return [d for p in range(jax.process_count()) for d in of(p)[:per_process]]
-    if request == "auto":
+    if request is None:
         return devices
     if request > len(devices):
         kind = devices[0].platform.upper()

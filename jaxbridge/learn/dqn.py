@@ -11,7 +11,7 @@ import optax
 from flax import struct
 
 from envs_jax.base import NoveltyEnv
-from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.config import Normalise, ParamSamples, PolyakPer, TargetInit, TrainConfig
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
@@ -81,7 +81,7 @@ class DQN:
 
 def q_network(config: TrainConfig) -> QNetwork:
     return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
-                    normalise=config.normalise == "minmax")
+                    normalise=config.normalise is Normalise.MINMAX)
 
 
 def make_optimizer(hyper: Hyper | TrainConfig) -> optax.GradientTransformation:
@@ -127,7 +127,7 @@ def init_learner(dqn: DQN, key: jax.Array) -> Learner:
     sample = jnp.zeros((1, input_size(env, num_features)), jnp.float32)
     variables = dqn.net.init(k_init, sample)
     params, norm = {"params": variables["params"]}, variables.get("norm")  # the scaling is not a parameter
-    target = (jax.tree.map(jnp.copy, params) if dqn.config.target_init == "copy"
+    target = (jax.tree.map(jnp.copy, params) if dqn.config.target_init is TargetInit.COPY
               else {"params": dqn.net.init(jax.random.fold_in(k_init, 1), sample)["params"]})
     return Learner(params=params, target_params=target,
                    opt_state=dqn.optimizer.init(params),
@@ -146,7 +146,7 @@ def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key
     hyper = dqn.hyper if hyper is None else hyper
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
-    stratified = config.param_samples == "stratified"
+    stratified = config.param_samples is ParamSamples.STRATIFIED
     best, _ = jax.vmap(lambda f, g, k, i: best_candidate(env, net, params, f, g, skills, k, at_task(task, i),
                                                          stratified))(
         batch.next_features, batch.next_num_ground, keys, batch.task)
@@ -234,7 +234,7 @@ def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array
     updates, opt_state = make_optimizer(hyper).update(grads, learner.opt_state, learner.params)
     params = optax.apply_updates(learner.params, updates)
     target = learner.target_params
-    if config.polyak_per == "update":
+    if config.polyak_per is PolyakPer.UPDATE:
         target = optax.incremental_update(params, target, config.polyak_tau)
     learner = learner.replace(params=params, target_params=target, opt_state=opt_state,
                               updates=learner.updates + 1)
@@ -286,7 +286,7 @@ def minibatch_indices(config: TrainConfig, learner: Learner) -> tuple[jax.Array,
 def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) -> Learner:
     """The authors' polyak schedule: one soft update of the target towards the online net per training
     bridge decision, i.e. (1 - tau)^decisions of the old target is kept."""
-    if config.polyak_per != "decision":
+    if config.polyak_per is not PolyakPer.DECISION:
         return learner
     keep = (1.0 - config.polyak_tau) ** decisions.astype(jnp.float32)
     target = jax.tree.map(lambda t, p: keep * t + (1.0 - keep) * p, learner.target_params, learner.params)

@@ -46,7 +46,7 @@ if not hasattr(jax, "device_put_replicated"):  # the attribute raises on jax 0.1
 @lru_cache(maxsize=None)
 def _networks(algorithm: str, obs_size: int, action_size: int):
     """brax's default networks of `algorithm`, built once per shape (the trainers build equal ones)."""
-    make = ppo_networks.make_ppo_networks if algorithm == "ppo" else sac_networks.make_sac_networks
+    make = {"ppo": ppo_networks.make_ppo_networks, "sac": sac_networks.make_sac_networks}[algorithm]
     return make(obs_size, action_size, preprocess_observations_fn=running_statistics.normalize)
 
 

@@ -20,6 +20,7 @@ from flax import struct
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import TaskArrays
+from jaxbridge.learn.approaches import BridgeKind
 from jaxbridge.learn.devices import SeedMesh
 from jaxbridge.learn.dqn import Learner, epsilon, init_learner, learn, stored_transitions
 from jaxbridge.learn.hyper import Hyper
@@ -112,7 +113,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
             learner, loss, q_abs_max = learn(setup.dqn, learner, decisions, train_tasks.tasks, hyper)
         else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
             learner = learner.replace(decisions=learner.decisions + decisions)
-            eps = jnp.float32(1.0 if approach.bridge == "random" else 0.0)
+            eps = jnp.float32(1.0 if approach.bridge is BridgeKind.RANDOM else 0.0)
             loss = q_abs_max = jnp.float32(0.0)
         learner = learner.replace(key=k_next)
 

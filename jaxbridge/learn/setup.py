@@ -12,7 +12,7 @@ import jax.numpy as jnp
 
 from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.bridges import Bridge
-from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.episode import Controls
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch
 from jaxbridge.learn.approaches import Approach, get_approach
@@ -51,7 +51,7 @@ class Setup:
         """The approach's bridge on `env` (equal arguments give equal bridges: one compilation)."""
         config = self.config
         return self.approach.make_bridge(env, self.dqn.net, config.n_sample, config.explore_ground_operators,
-                                         config.param_samples == "stratified")
+                                         config.param_samples is ParamSamples.STRATIFIED)
 
     def init_learners(self) -> Learner:
         """One learner per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""

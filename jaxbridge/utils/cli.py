@@ -44,9 +44,9 @@ def positive_float(text: str) -> float:
     return value
 
 
-def auto_or_positive_int(text: str) -> str | int:
-    """"auto" or a positive integer (e.g. --devices)."""
-    return "auto" if text.strip() == "auto" else _int_at_least(text, 1, "auto or a positive integer")
+def auto_or_positive_int(text: str) -> int | None:
+    """A positive integer, or None for "auto" (e.g. --devices: every device)."""
+    return None if text.strip() == "auto" else _int_at_least(text, 1, "auto or a positive integer")
 
 
 def run_main(main, argv=None) -> int:
