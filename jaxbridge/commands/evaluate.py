@@ -18,7 +18,7 @@ from jaxbridge.run.checkpoint import CheckpointError
 from jaxbridge.run.comparison import run_labels
 from jaxbridge.run.memory import TooBig, check_evaluation
 from jaxbridge.run.evaluate import evaluate_run, format_comparison, format_table, load_policy, run_bridge, summarise
-from jaxbridge.run.runner import load_config
+from jaxbridge.run.run_state import load_config
 from jaxbridge.run.sweep import evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
 from jaxbridge.utils.cli import UsageError
 from jaxbridge.utils.files import write_atomic

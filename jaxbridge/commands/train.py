@@ -150,7 +150,8 @@ def resumed(run_dir: Path, progress: bool, workers: int | None, devices: list, i
     from jaxbridge.run import rundir
     from jaxbridge.run.checkpoint import CheckpointError
     from jaxbridge.run.experiments import check_resumable, is_experiment_dir, load_experiment, runs, train_approaches
-    from jaxbridge.run.runner import load_config, train
+    from jaxbridge.run.run_state import load_config
+    from jaxbridge.run.runner import train
 
     try:
         if is_experiment_dir(run_dir):

@@ -18,7 +18,8 @@ from jaxbridge.learn.low_level import TRAINERS, Budget, evaluate
 from jaxbridge.learn.online import CycleMetrics
 from jaxbridge.learn.setup import Setup
 from jaxbridge.run import artifacts, checkpoint
-from jaxbridge.run.runner import Interrupted, checkpoint_record
+from jaxbridge.run.run_state import checkpoint_record
+from jaxbridge.run.runner import Interrupted
 from jaxbridge.utils import compile_cache
 from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.files import write_atomic
