@@ -18,7 +18,6 @@ from pathlib import Path
 from envs_jax import env_class
 from jaxbridge.core import grid as hyper_grid
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.devices import default_workers, split_devices
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint, comparison, rundir
@@ -89,78 +88,23 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
     if resume:
         check_resumable(experiment_dir, list(named))
     elif primary:
-        write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
-            {"config": config.to_dict(), "approaches": approaches,
-             **({"sweep": {k: list(v) for k, v in grid.items()}} if grid else {})}, indent=2) + "\n")
+        write_experiment_file(experiment_dir, config, approaches, grid)
         rundir.discard(replaced)
     names = list(named)
     programs = [[names[i] for i in group] for group in hyper_grid.program_groups(list(named.values()))]
     # Across processes the programs take turns, in the same order everywhere: the gathers after each
     # cycle are collective, and two programs' gathers must not cross.
     workers = 1 if multi_process() else workers or default_workers(programs)
-    env_cls = env_class(config.env)  # resolved once for every approach
     what = f"{len(approaches)} approaches" + (f" x {len(names) // len(approaches)} settings" if grid else "")
     bar = cycle_progress(config.cycles * len(programs), f"{config.env} x{config.num_seeds} seeds, {what}",
                          progress and primary)
     stop = stop or threading.Event()
-    device_shares = queue.SimpleQueue()  # a worker takes a share of the devices per approach, then returns it
-    for share in split_devices(devices, min(workers, len(programs))):
-        device_shares.put(share)
-
-    def run(program: list[str]) -> list[dict]:
-        if stop.is_set():  # interrupted before this program's turn
-            raise Interrupted(0)
-        if get_approach(named[program[0]].approach).low_level:  # brax: seed after seed, one checkpoint
-            return [train_low_level_run(make_setup(named[n], env_cls), experiment_dir / n) for n in program]
-        run_dirs = [experiment_dir / name for name in program]
-        setup = make_setup(named[program[0]], env_cls)
-        started = all(checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
-        if not started and primary:
-            for run_dir in run_dirs:
-                rundir.fresh(run_dir)
-        share = device_shares.get()
-        try:
-            return train_settings(setup, [(named[n], experiment_dir / n) for n in program],
-                                  resume=started, bar=bar, stop=stop, devices=share, trained=trained,
-                                  tensorboard=tensorboard)
-        finally:
-            device_shares.put(share)
-
-    def train_low_level_run(setup, run_dir: Path) -> dict:
-        from jaxbridge.run import low_level_runs  # brax: imported only when used
-        done = low_level_runs.finished(run_dir, setup.config)
-        if done is not None:
-            bar.update(setup.config.cycles)
-            return done
-        if primary:
-            rundir.fresh(run_dir)
-        return low_level_runs.train_low_level(setup, run_dir, bar=bar, stop=stop)
-
+    program = ProgramRun(named, experiment_dir, env_class(config.env), bar, stop, trained, tensorboard,
+                         split_devices(devices, min(workers, len(programs))))
     order, unwritable = sorted(programs, key=lambda p: -COST.get(named[p[0]].approach, 0) * len(p)), False
     try:
-        with ThreadPoolExecutor(workers, thread_name_prefix="approach") as pool:
-            futures = {program[0]: pool.submit(run, program) for program in order}
-            try:
-                # Wake up now and then: the OS may deliver Ctrl-C's SIGINT to a worker thread, and Python
-                # only runs the handler (raising KeyboardInterrupt here) when the main thread runs.
-                pending = set(futures.values())
-                while pending:
-                    done, pending = wait(pending, timeout=0.2, return_when=FIRST_EXCEPTION)
-                    if any(f.exception() is not None for f in done):
-                        break
-            except KeyboardInterrupt:
-                pass
-            stop.set()  # after Ctrl-C or a fault: every running approach checkpoints and stops
-            wait(futures.values())
-        errors = [f.exception() for f in futures.values() if f.exception() is not None]
-        faults = [e for e in errors if not isinstance(e, Interrupted)]
-        if faults:
-            raise faults[0]
-        if errors:
-            cycles = ", ".join(f"{n} {futures[n].exception().cycle}" for n in futures
-                               if isinstance(futures[n].exception(), Interrupted))
-            raise Interrupted(-1, f"interrupted; checkpoints saved ({cycles} cycles done)")
-        infos = {name: info for program in programs for name, info in zip(program, futures[program[0]].result())}
+        results = run_side_by_side(program, order, workers, stop)
+        infos = {name: info for p in programs for name, info in zip(p, results[p[0]])}
         return {name: infos[name] for name in names}
     except WriteError:
         unwritable = True
@@ -170,3 +114,82 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
         done = [n for n in names if (experiment_dir / n / "metrics.csv").is_file()]
         if done and primary and not unwritable:
             comparison.write_comparison(experiment_dir, config.env, comparison.run_labels(done))
+
+
+def write_experiment_file(experiment_dir: Path, config: TrainConfig, approaches: list[str],
+                          grid: dict[str, tuple] | None) -> None:
+    """experiment.json: the base config, the approaches and the sweep's grid (what --resume reads)."""
+    write_atomic(experiment_dir / EXPERIMENT_FILE, json.dumps(
+        {"config": config.to_dict(), "approaches": approaches,
+         **({"sweep": {k: list(v) for k, v in grid.items()}} if grid else {})}, indent=2) + "\n")
+
+
+class ProgramRun:
+    """Runs one program of an experiment (its runs that train as one, `program` their names): brax's
+    low-level runs seed after seed, the others by train_settings on a share of the devices, which a
+    worker takes for the program and returns after it."""
+
+    def __init__(self, named: dict[str, TrainConfig], experiment_dir: Path, env_cls, bar, stop: threading.Event,
+                 trained: threading.Event | None, tensorboard: bool, device_shares: list):
+        self.named, self.experiment_dir, self.env_cls, self.bar = named, experiment_dir, env_cls, bar
+        self.stop, self.trained, self.tensorboard = stop, trained, tensorboard
+        self.device_shares = queue.SimpleQueue()
+        for share in device_shares:
+            self.device_shares.put(share)
+
+    def __call__(self, program: list[str]) -> list[dict]:
+        if self.stop.is_set():  # interrupted before this program's turn
+            raise Interrupted(0)
+        setup = make_setup(self.named[program[0]], self.env_cls)
+        if setup.approach.low_level:  # brax: seed after seed, one checkpoint
+            return [self.low_level(make_setup(self.named[n], self.env_cls), self.experiment_dir / n) for n in program]
+        run_dirs = [self.experiment_dir / name for name in program]
+        started = all(checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
+        if not started and is_primary():
+            for run_dir in run_dirs:
+                rundir.fresh(run_dir)
+        share = self.device_shares.get()
+        try:
+            return train_settings(setup, [(self.named[n], d) for n, d in zip(program, run_dirs)], resume=started,
+                                  bar=self.bar, stop=self.stop, devices=share, trained=self.trained,
+                                  tensorboard=self.tensorboard)
+        finally:
+            self.device_shares.put(share)
+
+    def low_level(self, setup, run_dir: Path) -> dict:
+        from jaxbridge.run import low_level_runs  # brax: imported only when used
+        done = low_level_runs.finished(run_dir, setup.config)
+        if done is not None:
+            self.bar.update(setup.config.cycles)
+            return done
+        if is_primary():
+            rundir.fresh(run_dir)
+        return low_level_runs.train_low_level(setup, run_dir, bar=self.bar, stop=self.stop)
+
+
+def run_side_by_side(run, programs: list[list[str]], workers: int, stop: threading.Event) -> dict[str, list[dict]]:
+    """`run(program)` for every program, `workers` at a time, in that order; {first name: its result}.
+    After Ctrl-C or an error every running program checkpoints and stops; then the first error other
+    than an interruption is raised, or one Interrupted naming each interrupted program's cycles."""
+    with ThreadPoolExecutor(workers, thread_name_prefix="approach") as pool:
+        futures = {program[0]: pool.submit(run, program) for program in programs}
+        try:
+            # Wake up now and then: the OS may deliver Ctrl-C's SIGINT to a worker thread, and Python
+            # only runs the handler (raising KeyboardInterrupt here) when the main thread runs.
+            pending = set(futures.values())
+            while pending:
+                done, pending = wait(pending, timeout=0.2, return_when=FIRST_EXCEPTION)
+                if any(f.exception() is not None for f in done):
+                    break
+        except KeyboardInterrupt:
+            pass
+        stop.set()  # after Ctrl-C or a fault: every running approach checkpoints and stops
+        wait(futures.values())
+    errors = {name: f.exception() for name, f in futures.items() if f.exception() is not None}
+    faults = [e for e in errors.values() if not isinstance(e, Interrupted)]
+    if faults:
+        raise faults[0]
+    if errors:
+        cycles = ", ".join(f"{name} {e.cycle}" for name, e in errors.items())
+        raise Interrupted(-1, f"interrupted; checkpoints saved ({cycles} cycles done)")
+    return {name: f.result() for name, f in futures.items()}
