@@ -24,6 +24,7 @@ import optax
 
 from jaxbridge.learn import dqn
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.q_bridge import SplitInput, at_task, batch_input
@@ -79,8 +80,8 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
     per_update = lambda s: 1e6 * s / updates
     return {
         "input": learning.stored_features,
-        "learn_us": per_update(_seconds(lambda l: dqn.learn(learning, l, jnp.int32(0), tasks), learner)),
-        "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(learning, l, l.key, task), learner),
+        "learn_us": per_update(_seconds(lambda l: dqn.learn(learning, Hyper.of(config), l, jnp.int32(0), tasks), learner)),
+        "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(learning, Hyper.of(config), l, l.key, task), learner),
         "draws_us": per_update(_seconds(lambda l: dqn.minibatch_indices(config, l), learner)),
         "gather_encode_us": per_update(_seconds(gather_encode, jnp.float32(0))),
         "forward_backward_us": per_update(_seconds(repeat(forward_backward(inputs)), learner.params)),

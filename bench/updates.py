@@ -24,6 +24,7 @@ def measure_updates(setup, seeds, learners, updates: int, repeats: int = 3) -> d
     from jaxbridge.utils import compile_cache
     from dataclasses import replace
     from jaxbridge.learn.dqn import minibatch_indices, update_step
+    from jaxbridge.learn.hyper import Hyper
 
     config = replace(setup.config, updates_per_cycle=updates)
     learning = replace(setup.dqn, config=config)
@@ -31,7 +32,7 @@ def measure_updates(setup, seeds, learners, updates: int, repeats: int = 3) -> d
     def per_seed(learner, targets):
         key, indices = minibatch_indices(config, learner)
         learner, (losses, _) = jax.lax.scan(
-            lambda learner, index: update_step(learning, learner, targets, index), learner, indices)
+            lambda learner, index: update_step(learning, Hyper.of(config), learner, targets, index), learner, indices)
         return learner.replace(key=key), losses.mean()
 
     run = jax.jit(seeds.map_seeds(per_seed), out_shardings=seeds.sharding)

@@ -16,6 +16,7 @@ from jaxbridge.learn import dqn
 from jaxbridge.core.bridges import RandomBridge, make_bridge
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh
+from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.dqn import epsilon, init_learner, learn, make_dqn, minibatch_indices, td_targets
 from jaxbridge.core.meta_policy import Controls, rollout
 from jaxbridge.learn.online import Cycle
@@ -23,7 +24,7 @@ from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.smoothing import smooth
 from jaxbridge.learn.q_bridge import (SPLIT_FROM_FEATURES, QNetwork, SplitInput, best_candidate, candidate_skills,
                                 candidates_input, encode, input_size, sample_candidates, task_state_split)
-from jaxbridge.learn.replay import add, init_buffer, sample, sample_indices
+from jaxbridge.learn.replay import add, init_buffer, sample_indices
 from jaxbridge.core.tasks import evaluation_batch, make_batch
 from jaxbridge.learn.transitions import Transition, episode_transitions, for_buffer, successor_features
 
@@ -59,7 +60,7 @@ def test_double_dqn_target_on_a_hand_built_batch():
     batch = Transition(features=features, skill=jnp.array([3, 0, 5]), param=jnp.array([0.1, 0.0, 0.0]),
                        reward=jnp.array([0.0, 0.0, 1.0]), done=jnp.array([False, False, True]),
                        next_features=features[::-1], next_num_ground=ground)
-    y = np.asarray(td_targets(make_dqn(cfg, ENV, ENV.num_features), online, target, batch, jax.random.key(0)))
+    y = np.asarray(td_targets(make_dqn(cfg, ENV, ENV.num_features), Hyper.of(cfg), online, target, batch, jax.random.key(0)))
 
     def q(params, f, skill, param):
         return float(net.apply(params, encode(ENV, f, jnp.int32(skill), jnp.float32(param))))
@@ -85,7 +86,7 @@ def test_bootstrapped_values_are_clipped_to_the_achievable_range_only_when_asked
                        next_num_ground=jnp.ones((2, ENV.num_skills + 1), jnp.int32))
     for clip, expected in ((False, 0.8 * 5.0), (True, 0.8 * 1.5)):
         cfg = TrainConfig(call_planner_bonus=0.5, clip_bootstrap=clip)
-        y = np.asarray(td_targets(make_dqn(cfg, ENV, ENV.num_features), high, high, batch, jax.random.key(1)))
+        y = np.asarray(td_targets(make_dqn(cfg, ENV, ENV.num_features), Hyper.of(cfg), high, high, batch, jax.random.key(1)))
         assert y[0] == pytest.approx(expected) and y[1] == 1.5  # terminal rewards are never clipped
 
 
@@ -100,10 +101,10 @@ def test_a_step_discount_discounts_each_target_by_the_steps_its_transition_spans
     batch = Transition(features=f, skill=jnp.array([0, 0, 5]), param=jnp.zeros(3), reward=jnp.array([0.0, 0.0, 1.0]),
                        done=jnp.array([False, False, True]), next_features=f,
                        next_num_ground=jnp.ones((3, ENV.num_skills + 1), jnp.int32), steps=jnp.array([1, 4, 30]))
-    y = np.asarray(td_targets(make_dqn(TrainConfig(step_gamma=0.9), ENV, ENV.num_features), five, five, batch,
+    y = np.asarray(td_targets(make_dqn(TrainConfig(step_gamma=0.9), ENV, ENV.num_features), Hyper.of(TrainConfig()), five, five, batch,
                               jax.random.key(1)))
     np.testing.assert_allclose(y, [0.8 * 5.0 * 0.9, 0.8 * 5.0 * 0.9 ** 4, 0.9 ** 30], rtol=1e-5)
-    plain = np.asarray(td_targets(make_dqn(TrainConfig(), ENV, ENV.num_features), five, five,
+    plain = np.asarray(td_targets(make_dqn(TrainConfig(), ENV, ENV.num_features), Hyper.of(TrainConfig()), five, five,
                                   batch.replace(steps=None), jax.random.key(1)))
     np.testing.assert_allclose(plain, [4.0, 4.0, 1.0], rtol=1e-6)
 
@@ -140,7 +141,7 @@ def test_an_ensemble_is_the_minimum_of_independent_members_all_fitted_to_the_tar
     batch = Transition(features=f, skill=skill, param=jnp.zeros(64), reward=(skill == 0).astype(jnp.float32),
                        done=jnp.ones(64, bool), next_features=f, next_num_ground=jnp.ones((64, ENV.num_skills + 1), jnp.int32))
     learner = learner.replace(buffer=add(learner.buffer, for_buffer(batch), jnp.ones(64, bool)))
-    learner, loss, _ = jax.jit(lambda l: learn(make_dqn(cfg, ENV, ENV.num_features), l, jnp.int32(64)))(learner)
+    learner, loss, _ = jax.jit(lambda l: learn(make_dqn(cfg, ENV, ENV.num_features), Hyper.of(cfg), l, jnp.int32(64)))(learner)
     members = pair.apply(learner.params, encode(ENV, f, skill, jnp.zeros(64)), members=True)
     assert members.shape == (2, 64) and np.abs(np.asarray(members) - np.asarray(batch.reward)).max() < 0.2
     value = pair.apply(learner.params, encode(ENV, f, skill, jnp.zeros(64)))
@@ -165,7 +166,7 @@ def test_feature_noise_fits_the_neighbourhood_of_a_stored_state_not_only_the_poi
         learning = make_dqn(cfg, ENV, ENV.num_features)
         learner = init_learner(learning, jax.random.key(seed))
         learner = learner.replace(buffer=add(learner.buffer, for_buffer(batch), jnp.ones(n, bool)))
-        learner, _, _ = jax.jit(lambda l: learn(learning, l, jnp.int32(n)))(learner)
+        learner, _, _ = jax.jit(lambda l: learn(learning, Hyper.of(learning.config), l, jnp.int32(n)))(learner)
         assert float(learning.net.apply(learner.online, encode(ENV, f0, jnp.int32(0), jnp.float32(0)))) == pytest.approx(1.0, abs=0.05)
         q = learning.net.apply(learner.online, encode(ENV, nearby, jnp.int32(0), jnp.float32(0)))
         error[noise] = float(jnp.abs(q - 1.0).mean())
@@ -204,7 +205,7 @@ def test_replay_buffer_masked_insert_wraps_fifo_and_samples_stored_items():
     buffer = add(buffer, jnp.array([10.0, 11.0, 12.0]), jnp.array([True, True, True]))
     assert int(buffer.size) == 4 and np.asarray(buffer.data).tolist() == [11.0, 12.0, 4.0, 10.0]
     assert int(buffer.insert_at) == 2
-    drawn = np.asarray(sample(buffer, jax.random.key(0), 200))
+    drawn = np.asarray(buffer.data)[np.asarray(sample_indices(buffer, jax.random.key(0), 200))]
     assert set(drawn.tolist()) == {4.0, 10.0, 11.0, 12.0}
 
 
@@ -280,12 +281,12 @@ def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap
         differ += int(np.any(restored != np.asarray(learner.buffer.data.features)[live], axis=1).sum())
 
         key = jax.random.key(first)
-        targets = np.asarray(dqn.relabel(learning, learner, key))
+        targets = np.asarray(dqn.relabel(learning, Hyper.of(learning.config), learner, key))
         chunks = -(-capacity // chunk)
         pad = lambda x: jnp.pad(x, [(0, chunks * chunk - capacity)] + [(0, 0)] * (x.ndim - 1))
         padded = jax.tree.map(pad, full.data)
         expected = np.concatenate([np.asarray(td_targets(
-            learning, learner.params, learner.target_params,
+            learning, Hyper.of(learning.config), learner.params, learner.target_params,
             jax.tree.map(lambda x: x[i * chunk:(i + 1) * chunk], padded), jax.random.fold_in(key, i)))
             for i in range(chunks)])
         assert np.array_equal(targets[slots], expected[slots])
@@ -467,11 +468,12 @@ def test_a_split_learner_relabels_and_updates_as_the_unsplit_one():
     assert split.buffer.data.features.shape[-1] == len(split_dqn.split.varying) < whole.buffer.data.features.shape[-1]
     task = split_dqn.task_part(batch.arrays.tasks)
     key = jax.random.key(6)
-    targets, stored = dqn.relabel(whole_dqn, whole, key), int(whole.buffer.size)  # empty slots differ, unread
-    chex.assert_trees_all_close(dqn.relabel(split_dqn, split, key, task)[:stored], targets[:stored], atol=1e-4)
+    hyper = Hyper.of(whole_dqn.config)
+    targets, stored = dqn.relabel(whole_dqn, hyper, whole, key), int(whole.buffer.size)  # empty slots differ, unread
+    chex.assert_trees_all_close(dqn.relabel(split_dqn, hyper, split, key, task)[:stored], targets[:stored], atol=1e-4)
     index = jnp.arange(32) % stored
-    updated = [dqn.update_step(whole_dqn, whole, targets, index)[0].params,
-               dqn.update_step(split_dqn, split, targets, index, task)[0].params]
+    updated = [dqn.update_step(whole_dqn, hyper, whole, targets, index)[0].params,
+               dqn.update_step(split_dqn, hyper, split, targets, index, task)[0].params]
     chex.assert_trees_all_close(updated[1], updated[0], atol=1e-5)
 
 

@@ -14,6 +14,7 @@ from jaxbridge.commands.train import make_config
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import AUTHORS, preset_values
 from jaxbridge.learn.dqn import learn
+from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.q_bridge import QNetwork
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.cli import UsageError
@@ -43,7 +44,6 @@ def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_gua
     """Every env's default has the guard (runs saved before it, none); the config's value is what the
     cycle's rollouts run with."""
     from jaxbridge.learn import online
-    from jaxbridge.learn.hyper import Hyper
 
     assert all(TrainConfig.for_env(env).loop_guard for env in ENVS)
     old_run = {k: v for k, v in TrainConfig().to_dict().items() if k != "loop_guard"}
@@ -166,7 +166,7 @@ def test_the_optimizer_is_new_for_each_cycles_fit_only_when_asked(reset):
     learner = jax.tree.map(lambda x: x[0], setup.init_learners())
     clip, (adam, scale) = learner.opt_state
     learner = learner.replace(opt_state=(clip, (adam._replace(count=jnp.int32(57)), scale)))
-    after, _, _ = jax.jit(lambda l: learn(setup.dqn, l, jnp.int32(0)))(learner)  # empty buffer: no update
+    after, _, _ = jax.jit(lambda l: learn(setup.dqn, Hyper.of(setup.config), l, jnp.int32(0)))(learner)  # empty buffer: no update
     assert int(after.opt_state[1][0].count) == (0 if reset else 57)
 
 
@@ -257,11 +257,11 @@ def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_r
     learners, _ = cycle(cycle.seeds.place(setup.init_learners()))  # one cycle: a filled buffer
     learner = jax.tree.map(lambda x: x[0], cycle.seeds.unpad(learners))
     assert learner.buffer.size > 0 and config.fit_patience < int(learner.updates) <= config.updates_per_cycle
-    dqn, hyper = setup.dqn, setup.dqn.hyper
-    targets = relabel(dqn, learner, jax.random.key(3), None, hyper)
-    fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn, l, targets, None, hyper))(learner)
+    dqn, hyper = setup.dqn, Hyper.of(setup.config)
+    targets = relabel(dqn, hyper, learner, jax.random.key(3), None)
+    fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn, hyper, l, targets, None))(learner)
 
-    step = jax.jit(lambda l, index: update_step(dqn, l, targets, index, None, hyper))
+    step = jax.jit(lambda l, index: update_step(dqn, hyper, l, targets, index, None))
     current, best, best_loss, since_best, done = learner, learner.params, np.inf, 0, 0
     while done < config.updates_per_cycle and since_best < config.fit_patience:
         key, k_sample = jax.random.split(current.key)
@@ -278,7 +278,7 @@ def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_r
     assert not all(np.allclose(a, b) for a, b in zip(jax.tree.leaves(fitted.params), jax.tree.leaves(current.params)))
     capped = dataclasses.replace(config, fit_patience=10**6, updates_per_cycle=37)
     dqn_capped = make_setup(capped).dqn
-    fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn_capped, l, targets, None, hyper))(learner)
+    fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn_capped, hyper, l, targets, None))(learner)
     assert int(fitted.updates - learner.updates) == 37
 
 

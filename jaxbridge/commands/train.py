@@ -41,9 +41,10 @@ def make_config(flags: dict) -> tuple[TrainConfig, type]:
     if config.test_protocol not in env_cls.test_protocols:
         raise UsageError(f"--test-protocol {config.test_protocol!r}: {env_cls.name} has "
                          f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}")
-    if config.episodes_per_cycle * config.train_steps > config.buffer_capacity:
-        raise UsageError(f"--episodes-per-cycle x {config.train_steps} steps must fit the replay buffer "
-                         f"({config.buffer_capacity} transitions)")
+    try:
+        config.check_buffer_fits()
+    except ValueError as err:
+        raise UsageError(f"--episodes-per-cycle: {err}") from None
     if config.seed_block > config.num_seeds:
         raise UsageError(f"--seed-block {config.seed_block} is larger than the {config.num_seeds} seeds")
     return config, env_cls

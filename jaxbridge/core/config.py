@@ -251,6 +251,14 @@ class TrainConfig:
         from jaxbridge.core.presets import preset_values
         return cls(env=env, **{**preset_values(preset, env_class(env)), **overrides})
 
+    def check_buffer_fits(self) -> None:
+        """ValueError unless a cycle's training episodes fit the replay buffer in one insert: the buffer
+        finds a transition's next_features in the slot after it (learn/transitions.successor_features),
+        which an insert larger than the buffer would overwrite."""
+        if self.episodes_per_cycle * self.train_steps > self.buffer_capacity:
+            raise ValueError(f"{self.episodes_per_cycle} episodes x {self.train_steps} steps per cycle must fit the "
+                             f"replay buffer ({self.buffer_capacity} transitions)")
+
     @property
     def counts_steps(self) -> bool:
         """Transitions keep their env step count: a step discount is on (`step_gamma` below 1)."""

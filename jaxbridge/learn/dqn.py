@@ -58,11 +58,6 @@ class DQN:
     split: StateSplit | None = None
 
     @property
-    def hyper(self) -> Hyper:
-        """The config's numeric hyperparameters as constants (a cycle passes its slots' instead)."""
-        return Hyper.of(self.config)
-
-    @property
     def stored_features(self) -> int:
         """The width of an observation in the replay buffer: with a split, only its varying entries."""
         return self.num_features if self.split is None else len(self.split.varying)
@@ -136,14 +131,13 @@ def init_learner(dqn: DQN, key: jax.Array) -> Learner:
                    decisions=jnp.int32(0), updates=jnp.int32(0), norm=norm)
 
 
-def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key: jax.Array,
-               task: TaskPart | None = None, hyper: Hyper | None = None) -> jax.Array:
+def td_targets(dqn: DQN, hyper: Hyper, params: Any, target_params: Any, batch: Transition, key: jax.Array,
+               task: TaskPart | None = None) -> jax.Array:
     """Double DQN: the online net picks a* among the next state's applicable actions (n_target_sample
     parameter samples per skill), the target net values it; no bootstrapping past `done`. With a split,
     `task` holds the training tasks' constants and `batch.task` indexes them. `hyper`: the numeric
-    hyperparameters (default: the config's)."""
+    hyperparameters (`Hyper.of(config)`, or a cycle's slot's)."""
     env, config, net = dqn.env, dqn.config, dqn.net
-    hyper = dqn.hyper if hyper is None else hyper
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
     stratified = config.param_samples is ParamSamples.STRATIFIED
@@ -165,8 +159,7 @@ def td_targets(dqn: DQN, params: Any, target_params: Any, batch: Transition, key
 RELABEL_CHUNK = 1024
 
 
-def relabel(dqn: DQN, learner: Learner, key: jax.Array, task: TaskPart | None = None,
-            hyper: Hyper | None = None) -> jax.Array:
+def relabel(dqn: DQN, hyper: Hyper, learner: Learner, key: jax.Array, task: TaskPart | None = None) -> jax.Array:
     """float32[capacity]: TD targets of every stored transition, recomputed once per cycle with the
     current nets (as the authors' code does), in chunks up to the buffer's fill level."""
     buffer = learner.buffer
@@ -178,7 +171,7 @@ def relabel(dqn: DQN, learner: Learner, key: jax.Array, task: TaskPart | None = 
         batch = jax.tree.map(lambda x: x[i], data)
         slots = i * RELABEL_CHUNK + jnp.arange(RELABEL_CHUNK)
         batch = batch.replace(next_features=successor_features(buffer.data.features, slots))
-        y = td_targets(dqn, learner.online, learner.target, batch, jax.random.fold_in(key, i), task, hyper)
+        y = td_targets(dqn, hyper, learner.online, learner.target, batch, jax.random.fold_in(key, i), task)
         return targets.at[i].set(y)
 
     filled = (buffer.size + RELABEL_CHUNK - 1) // RELABEL_CHUNK
@@ -209,12 +202,11 @@ def fit_scaling(dqn: DQN, buffer: ReplayBuffer, targets: jax.Array, task: TaskPa
             "y_shift": jnp.where(empty, 0.0, y_low), "y_scale": jnp.where(empty, 1.0, jnp.maximum(y_high - y_low, 1.0))}
 
 
-def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array,
-                task: TaskPart | None = None, hyper: Hyper | None = None) -> tuple[Learner, jax.Array]:
+def update_step(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array, index: jax.Array,
+                task: TaskPart | None = None) -> tuple[Learner, jax.Array]:
     """One Adam step on the minibatch of (transition, target) at buffer slots `index`, then a polyak
     step of the target net."""
     env, config, net = dqn.env, dqn.config, dqn.net
-    hyper = dqn.hyper if hyper is None else hyper
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
     features = batch.features
     if config.feature_noise > 0:  # a fresh draw per update: the update count tells the updates of a cycle apart
@@ -241,8 +233,8 @@ def update_step(dqn: DQN, learner: Learner, targets: jax.Array, index: jax.Array
     return learner, (loss, q_abs_max)
 
 
-def fit_until_no_better(dqn: DQN, learner: Learner, targets: jax.Array, task: TaskPart | None,
-                        hyper: Hyper) -> tuple[Learner, jax.Array, jax.Array]:
+def fit_until_no_better(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array,
+                        task: TaskPart | None) -> tuple[Learner, jax.Array, jax.Array]:
     """The authors' fit (reference/method.md §5): minibatch updates until `fit_patience` of them in a row
     found no lower minibatch loss, or `updates_per_cycle` were made, then the weights that scored the
     lowest loss are restored (those a minibatch was evaluated with, before its step). Each seed stops on
@@ -257,7 +249,7 @@ def fit_until_no_better(dqn: DQN, learner: Learner, targets: jax.Array, task: Ta
         learner, best_params, best_loss, since_best, done, loss_sum, q_abs = carry
         key, k_sample = jax.random.split(learner.key)
         index = sample_indices(learner.buffer, k_sample, config.batch_size)
-        updated, (loss, q_abs_max) = update_step(dqn, learner.replace(key=key), targets, index, task, hyper)
+        updated, (loss, q_abs_max) = update_step(dqn, hyper, learner.replace(key=key), targets, index, task)
         better = loss < best_loss
         best_params = jax.tree.map(lambda p, b: jnp.where(better, p, b), learner.params, best_params)
         return (updated, best_params, jnp.where(better, loss, best_loss), jnp.where(better, 0, since_best + 1),
@@ -293,19 +285,18 @@ def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) ->
     return learner.replace(target_params=target)
 
 
-def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None,
-          hyper: Hyper | None = None) -> tuple[Learner, jax.Array, jax.Array]:
+def learn(dqn: DQN, hyper: Hyper, learner: Learner, decisions: jax.Array,
+          tasks: Any = None) -> tuple[Learner, jax.Array, jax.Array]:
     """After a cycle's episodes (`decisions` training bridge decisions): track the target net, relabel
     the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty). `tasks`:
     the training tasks the buffer's `task` indices refer to (needed with a split); `hyper`: the numeric
-    hyperparameters (default: the config's).
+    hyperparameters (`Hyper.of(config)`, or a cycle's slot's).
     Returns the learner, the mean loss and the largest |Q| predicted in the minibatches."""
     config = dqn.config
-    hyper = dqn.hyper if hyper is None else hyper
     task = dqn.task_part(tasks)
     learner = track_target(config, learner, decisions)
     key, k_relabel = jax.random.split(learner.key)
-    targets = relabel(dqn, learner, k_relabel, task, hyper)  # with the previous cycle's scaling
+    targets = relabel(dqn, hyper, learner, k_relabel, task)  # with the previous cycle's scaling
     learner = learner.replace(key=key)
     if learner.norm is not None:
         learner = learner.replace(norm=fit_scaling(dqn, learner.buffer, targets, task))
@@ -315,12 +306,12 @@ def learn(dqn: DQN, learner: Learner, decisions: jax.Array, tasks: Any = None,
     if config.updates_per_cycle == 0:
         return learner, jnp.float32(0.0), jnp.float32(0.0)
     if config.fit_patience:
-        return fit_until_no_better(dqn, learner, targets, task, hyper)
+        return fit_until_no_better(dqn, hyper, learner, targets, task)
 
     ready = learner.buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
 
     def body(learner, index):
-        updated, (loss, q_abs_max) = update_step(dqn, learner, targets, index, task, hyper)
+        updated, (loss, q_abs_max) = update_step(dqn, hyper, learner, targets, index, task)
         stats = (jnp.where(ready, loss, 0.0), jnp.where(ready, q_abs_max, 0.0))
         # Selecting per update rather than once after the scan: the same values, but XLA fuses the
         # update differently without it and the last bits change (the runs in docs/ would not reproduce).

@@ -82,11 +82,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
         if shared:
             return QBridgeParams(q=params, epsilon=eps)
         return QBridgeParams(q=_repeat(params, n), epsilon=jnp.full(n, eps, jnp.float32))
-    # One insert per cycle, in order: the buffer finds a transition's next_features in the slot after it
-    # (transitions.successor_features), which an insert larger than the buffer would overwrite.
-    if episodes * config.train_steps > config.buffer_capacity:
-        raise ValueError(f"{episodes} episodes x {config.train_steps} steps per cycle must fit the replay buffer "
-                         f"({config.buffer_capacity} transitions)")
+    config.check_buffer_fits()
 
     def seed_cycle(learner: Learner, train_tasks: TaskArrays, test_tasks: TaskArrays,
                    hyper: Hyper) -> tuple[Learner, CycleMetrics]:
@@ -110,7 +106,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
             learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)
 
             # 3. Double-DQN updates.
-            learner, loss, q_abs_max = learn(setup.dqn, learner, decisions, train_tasks.tasks, hyper)
+            learner, loss, q_abs_max = learn(setup.dqn, hyper, learner, decisions, train_tasks.tasks)
         else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
             learner = learner.replace(decisions=learner.decisions + decisions)
             eps = jnp.float32(1.0 if approach.bridge is BridgeKind.RANDOM else 0.0)

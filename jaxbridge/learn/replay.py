@@ -47,9 +47,3 @@ def sample_indices(buffer: ReplayBuffer, key: jax.Array, batch_size: int) -> jax
     """int32[batch_size]: slots drawn uniformly with replacement from the stored items (slot 0 if the
     buffer is empty)."""
     return jax.random.randint(key, (batch_size,), 0, jnp.maximum(buffer.size, 1))
-
-
-def sample(buffer: ReplayBuffer, key: jax.Array, batch_size: int) -> Any:
-    """Uniform with replacement over the stored items (garbage if the buffer is empty)."""
-    index = sample_indices(buffer, key, batch_size)
-    return jax.tree.map(lambda d: d[index], buffer.data)
