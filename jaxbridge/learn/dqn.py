@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import jax
 import jax.numpy as jnp
@@ -56,6 +56,7 @@ class DQN:
     num_features: int  # the approach's observation width (object-centric features or the full state)
     # A wide observation's task-constant entries, split off (None: the buffer stores whole observations).
     split: StateSplit | None = None
+    fit: Callable | None = None  # the cycle's fit to its targets (choose_fit); make_dqn sets it
 
     @property
     def stored_features(self) -> int:
@@ -84,7 +85,7 @@ def make_optimizer(hyper: Hyper | TrainConfig) -> optax.GradientTransformation:
 
 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
-    return DQN(env, config, q_network(config), make_optimizer(config), num_features, split)
+    return DQN(env, config, q_network(config), make_optimizer(config), num_features, split, choose_fit(config))
 
 
 def epsilon(hyper: Hyper | TrainConfig, decisions: jax.Array) -> jax.Array:
@@ -302,12 +303,13 @@ def learn(dqn: DQN, hyper: Hyper, learner: Learner, decisions: jax.Array,
         learner = learner.replace(norm=fit_scaling(dqn, learner.buffer, targets, task))
     if config.reset_optimizer:  # the authors' new Adam for every cycle's fit
         learner = learner.replace(opt_state=dqn.optimizer.init(learner.params))
+    return dqn.fit(dqn, hyper, learner, targets, task)
 
-    if config.updates_per_cycle == 0:
-        return learner, jnp.float32(0.0), jnp.float32(0.0)
-    if config.fit_patience:
-        return fit_until_no_better(dqn, hyper, learner, targets, task)
 
+def fixed_updates(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array,
+                  task: TaskPart | None) -> tuple[Learner, jax.Array, jax.Array]:
+    """Ours' fit: exactly `updates_per_cycle` minibatch updates (none take effect while the buffer is
+    empty). Returns as `learn`."""
     ready = learner.buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
 
     def body(learner, index):
@@ -317,7 +319,21 @@ def learn(dqn: DQN, hyper: Hyper, learner: Learner, decisions: jax.Array,
         # update differently without it and the last bits change (the runs in docs/ would not reproduce).
         return jax.tree.map(lambda a, b: jnp.where(ready, a, b), updated, learner), stats
 
-    key, indices = minibatch_indices(config, learner)
+    key, indices = minibatch_indices(dqn.config, learner)
     learner, (losses, q_abs) = jax.lax.scan(body, learner, indices)
     learner = learner.replace(key=jnp.where(ready, key, learner.key))
     return learner, jnp.mean(losses), jnp.max(q_abs)
+
+
+def no_updates(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array,
+               task: TaskPart | None) -> tuple[Learner, jax.Array, jax.Array]:
+    """`updates_per_cycle` 0: the learner as it is, zero loss and |Q|."""
+    return learner, jnp.float32(0.0), jnp.float32(0.0)
+
+
+def choose_fit(config: TrainConfig) -> Callable:
+    """A cycle's fit to the relabelled targets, chosen once from the config: none, ours' fixed number of
+    updates, or the authors' early-stopping fit (`fit_patience`)."""
+    if config.updates_per_cycle == 0:
+        return no_updates
+    return fit_until_no_better if config.fit_patience else fixed_updates
