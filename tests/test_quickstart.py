@@ -3,6 +3,7 @@ evaluates on its test tasks, on tasks of a size and on given tasks, and draws an
 import csv
 import io
 import subprocess
+import tempfile
 import sys
 from pathlib import Path
 
@@ -52,3 +53,15 @@ def test_load_evaluates_and_renders_a_trained_run_from_python(quickstart, tmp_pa
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(ValueError, match="unknown approach"):
         jaxbridge.train("light_switch_door", approaches="ourz", seeds=1, cycles=1)
+
+
+def test_train_without_out_returns_the_same_numbers_and_leaves_no_files(quickstart, tmp_path, monkeypatch):
+    out, _ = quickstart
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # where the run's temporary directory goes
+    experiment = jaxbridge.train("light_switch_door", seeds=2, cycles=1)  # the example's config, one cycle
+    assert experiment.run_dir is None and list(tmp_path.iterdir()) == []
+    example = rows((out / "quickstart" / "ours" / "metrics.csv").read_text())
+    for column, values in experiment.metrics["ours"].items():
+        assert values.shape == (2, 1)
+        if "smooth" not in column:  # the smooth reward's window reaches past cycle 1 in the example
+            assert values[:, 0].tolist() == [float(r[column]) for r in example if r["cycle"] == "1"], column
