@@ -16,7 +16,8 @@ from run_helpers import train as train_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 RATES = ("0.001", "0.0003")  # 0.001 is the default
-CONFIG = jaxbridge.make_config("light_switch_door", seeds=4, cycles=10, updates_per_cycle=50, checkpoint_every=10)
+CONFIG = jaxbridge.make_config("light_switch_door", seeds=4, cycles=10, updates_per_cycle=20, episodes_per_cycle=2,
+                               checkpoint_every=10)
 
 
 @pytest.fixture(scope="module")
@@ -24,9 +25,8 @@ def cli_metrics(tmp_path_factory):
     """train.py's metrics.csv of LSD ours, 4 seeds x 10 cycles, at each learning rate (one sweep)."""
     out = tmp_path_factory.mktemp("runs")
     proc = train_cli("--env", "light_switch_door", "--approaches", "ours", "--num-seeds", "4", "--cycles", "10",
-                     "--updates-per-cycle", "50", "--checkpoint-every", "10", "--sweep", f"learning_rate={','.join(RATES)}",
-                     "--no-progress",
-                     "--out", str(out), "--name", "cli")
+                     "--updates-per-cycle", "20", "--episodes-per-cycle", "2", "--checkpoint-every", "10",
+                     "--sweep", f"learning_rate={','.join(RATES)}", "--no-progress", "--out", str(out), "--name", "cli")
     assert proc.returncode == 0, proc.stderr
     return {rate: (out / "cli" / f"ours@learning_rate={rate}" / "metrics.csv").read_text() for rate in RATES}
 
@@ -44,7 +44,7 @@ def rows(text: str) -> list[dict]:
 def test_make_train_is_train_py_as_one_jitted_function(cli_metrics):
     out = jax.jit(jaxbridge.make_train(CONFIG))()
     assert rows(as_csv(out.metrics)) == rows(cli_metrics["0.001"])  # the same per-seed program: the same numbers
-    assert out.learners.updates.tolist() == [10 * 50] * 4
+    assert out.learners.updates.tolist() == [10 * 20] * 4
 
 
 def test_one_vmapped_train_over_two_learning_rates_gives_each_rates_train_py_numbers(cli_metrics):

@@ -132,8 +132,8 @@ class Crash(Exception):
 
 
 def test_a_plan_repair_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test_rate(tmp_path):
-    config = TrainConfig(approach="plan_progress", num_seeds=1, cycles=2, updates_per_cycle=10, checkpoint_every=1,
-                         num_test_tasks=2)
+    config = TrainConfig(approach="plan_progress", num_seeds=1, cycles=2, updates_per_cycle=10, episodes_per_cycle=2,
+                         checkpoint_every=1, num_test_tasks=2)
     setup = make_setup(config)
     for name in ("whole", "crashed"):
         rundir.prepare(tmp_path / name, overwrite=False)
