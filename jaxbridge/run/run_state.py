@@ -17,7 +17,7 @@ from jaxbridge.learn.devices import SeedMesh, describe
 from jaxbridge.learn.online import CycleMetrics
 from jaxbridge.learn.setup import Setup
 from jaxbridge.run import artifacts, checkpoint
-from jaxbridge.utils.distributed import is_primary
+from jaxbridge.utils.distributed import is_primary, sync_processes
 from jaxbridge.utils.files import write_atomic
 
 
@@ -77,10 +77,12 @@ def restored(group: RunGroup) -> tuple[Done, float]:
     for config, run_dir in group.settings:
         check_checkpoint_belongs(config, run_dir)
     step = common_step(group.run_dirs)
-    for run_dir in group.run_dirs:
-        checkpoint.discard_after(run_dir / "checkpoints", step)
     fresh = group.setup.init_learners()
     states = [checkpoint.restore(d / "checkpoints", fresh, step) for d in group.run_dirs]
+    # Every process has read its checkpoints before process 0, which alone writes, deletes the later ones.
+    sync_processes("restored")
+    for run_dir in group.run_dirs if group.primary else []:
+        checkpoint.discard_after(run_dir / "checkpoints", step)
     done = Done(_concat([state for state, _, _ in states]), [_history(record) for _, record, _ in states])
     return done, max(float(record["elapsed_s"]) for _, record, _ in states)
 

@@ -58,3 +58,10 @@ def is_primary() -> bool:
 
 def multi_process() -> bool:
     return jax.process_count() > 1
+
+
+def sync_processes(name: str) -> None:
+    """Wait until every process of a multi-process run gets here (at once in a single process)."""
+    if multi_process():
+        from jax.experimental import multihost_utils
+        multihost_utils.sync_global_devices(name)
