@@ -27,9 +27,11 @@ def eval_main():
 # The costliest test files first, by their seconds on a fresh clone (`python -m pytest --durations=0`):
 # with `--dist loadfile` each file runs whole on one worker, in this order (`--no-loadscope-reorder`),
 # so a long file started last cannot leave the other worker idle at the end.
-COSTLIEST_FIRST = ("test_claims.py", "test_low_level.py", "test_api.py", "test_learning.py", "test_cli.py", "test_reliability.py",
-                   "test_safety.py", "test_scale_out.py", "test_quickstart.py", "test_doorknobs.py", "test_plan_repair.py",
-                   "test_presets.py", "test_env_contract.py")
+COSTLIEST_FIRST = ("test_claims.py", "test_low_level.py", "test_learning.py", "test_cli.py", "test_scale_out.py",
+                   "test_reliability.py", "test_safety.py", "test_presets.py", "test_api.py", "test_devices.py",
+                   "test_doorknobs.py", "test_env_contract.py", "test_quickstart.py", "test_coffee.py", "test_plan_repair.py",
+                   "test_faults.py", "test_render.py", "test_meta_policy.py", "test_approaches.py", "test_sweep.py",
+                   "test_optim.py", "test_light_switch_door.py")
 
 
 def pytest_collection_modifyitems(items):

@@ -1,8 +1,9 @@
 """The Python API from a script: examples/quickstart.py trains, plots, loads and evaluates; a loaded run
 evaluates on its test tasks, on tasks of a size and on given tasks, and draws an episode."""
+import contextlib
 import csv
 import io
-import subprocess
+import runpy
 import tempfile
 import sys
 from pathlib import Path
@@ -21,12 +22,14 @@ def rows(text: str) -> list[dict]:
 
 @pytest.fixture(scope="module")
 def quickstart(tmp_path_factory):
-    """examples/quickstart.py with 2 seeds x 2 cycles (its default 20 cycles, for the suite's time: the same calls)."""
+    """examples/quickstart.py run as a script, in this process (the programs it compiles serve the tests
+    below), with 2 seeds x 2 cycles (its default 20 cycles, for the suite's time: the same calls)."""
     out = tmp_path_factory.mktemp("quick")
-    proc = subprocess.run([sys.executable, "examples/quickstart.py", "--seeds", "2", "--cycles", "2", "--out", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=600)
-    assert proc.returncode == 0, proc.stderr
-    return out, proc.stdout
+    printed = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stdout(printed):
+        patch.setattr(sys, "argv", ["quickstart.py", "--seeds", "2", "--cycles", "2", "--out", str(out)])
+        runpy.run_path(str(ROOT / "examples" / "quickstart.py"), run_name="__main__")
+    return out, printed.getvalue()
 
 
 def test_the_quickstart_example_trains_plots_loads_and_evaluates(quickstart):
