@@ -13,8 +13,6 @@ docs/API.md shows each call with what it returns. train.py and eval.py are these
 """
 from __future__ import annotations
 
-import csv
-import dataclasses
 import tempfile
 from contextlib import nullcontext
 from dataclasses import dataclass
@@ -25,11 +23,12 @@ import numpy as np
 
 from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.tasks import make_batch
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.online import TrainOutput, seed_keys
 from jaxbridge.learn.setup import make_setup
+from jaxbridge.run.artifacts import METRICS_CSV_FIELDS
+from jaxbridge.run.comparison import read_metrics
 
 __all__ = ["Episodes", "Experiment", "Hyper", "Policy", "TrainConfig", "TrainOutput", "load", "make_config", "make_env",
            "make_train", "seed_keys", "tasks", "train"]
@@ -47,11 +46,12 @@ def tasks(env: str | type[NoveltyEnv], seeds: int | Iterable[int], num_tasks: in
     """Each seed's task specs: its test tasks (`env.test_tasks(seed, num_tasks, protocol)`), or with `size`
     (the env's `task_sizes`, e.g. {"cells": 40, "doors": 3}) tasks of that size, drawn as eval.py
     --task-size draws them. `seeds`: a count (0..n-1) or the seeds. Returns {seed: [spec, ...]}."""
+    from jaxbridge.run.evaluate import sized_specs_per_seed
+
     env_cls = _env_class(env)
     if size is None:
         return {s: list(env_cls.test_tasks(s, num_tasks, protocol)) for s in _seed_list(seeds)}
-    return {s: [env_cls.sized_task(rng, **size) for _ in range(num_tasks)]
-            for s in _seed_list(seeds) for rng in [np.random.default_rng(s + 20000)]}
+    return sized_specs_per_seed(_seed_list(seeds), num_tasks, lambda rng: env_cls.sized_task(rng, **size))
 
 
 def make_config(env: str | type[NoveltyEnv] = "light_switch_door", seeds: int | Sequence[int] = 8, cycles: int = 100,
@@ -82,12 +82,7 @@ def make_train(config: TrainConfig) -> Callable[..., TrainOutput]:
     envs' tasks). Not for the low-level (brax) baselines."""
     from jaxbridge.learn.online import make_train as make_run
 
-    run = make_run(make_setup(config))
-
-    def train(keys=None, hyper: Hyper | None = None) -> TrainOutput:
-        return run(seed_keys(config) if keys is None else keys, hyper)
-
-    return train
+    return make_run(make_setup(config))
 
 
 @dataclass(frozen=True)
@@ -136,7 +131,9 @@ def train(env: str | type[NoveltyEnv] = "light_switch_door", approaches: str | S
         run_dir = Path(root) / (name or _env_class(env).name)
         replaced = rundir.prepare(run_dir, overwrite)
         summaries = train_approaches(base, names, run_dir, progress, replaced=replaced)
-        metrics = {approach: _read_metrics(run_dir / approach / "metrics.csv", base) for approach in names}
+        metrics = {approach: read_metrics(run_dir / approach, METRICS_CSV_FIELDS) for approach in names}
+    for columns in metrics.values():
+        del columns["seeds"]  # the config's
     return Experiment(base, tuple(names), metrics, summaries, run_dir if out is not None else None)
 
 
@@ -208,12 +205,9 @@ class Policy:
 
         if tasks is not None and task_size is not None:
             raise ValueError("give tasks or task_size, not both")
-        seeds = self.config.seeds if seeds is None else [int(s) for s in seeds]
-        if tasks is None:
-            sized = None if task_size is None else (lambda rng: self._trained.env_cls.sized_task(rng, **task_size))
-            return policy_tasks(self._trained, sized, num_tasks, seeds=seeds)
-        batch = make_batch(self._trained.env_cls, [t for _ in seeds for t in tasks], [s for s in seeds for _ in tasks])
-        return dataclasses.replace(batch, env=batch.env.with_quirks(self.config.env_quirks))
+        sized = None if task_size is None else (lambda rng: self._trained.env_cls.sized_task(rng, **task_size))
+        seeds = None if seeds is None else [int(s) for s in seeds]
+        return policy_tasks(self._trained, sized, num_tasks, seeds=seeds, specs=tasks)
 
 
 def load(run_dir: str | Path) -> Policy:
@@ -247,17 +241,3 @@ def _seed_list(seeds: int | Iterable[int]) -> list[int]:
     if not listed or min(listed) < 0:
         raise ValueError(f"seeds: a positive count or non-negative seeds, got {seeds!r}")
     return listed
-
-
-def _read_metrics(path: Path, config: TrainConfig) -> dict[str, np.ndarray]:
-    """metrics.csv as {column: float[seeds, cycles]}."""
-    rows = list(csv.DictReader(path.open()))
-    index = {s: i for i, s in enumerate(config.seeds)}
-    cycles = max(int(r["cycle"]) for r in rows)
-    columns = [c for c in rows[0] if c not in ("seed", "cycle")]
-    out = {c: np.full((config.num_seeds, cycles), np.nan) for c in columns}
-    for r in rows:
-        for c in columns:
-            out[c][index[int(r["seed"])], int(r["cycle"]) - 1] = float(r[c])
-    return out
-

@@ -194,9 +194,9 @@ def seed_keys(config: TrainConfig) -> jax.Array:
 
 def make_train(setup: Setup) -> Callable[..., TrainOutput]:
     """The whole online-learning run of `setup` as one pure function (PureJaxRL's shape):
-    `train(keys, hyper=None) -> TrainOutput`, every cycle of every seed, no files and no host work.
+    `train(keys=None, hyper=None) -> TrainOutput`, every cycle of every seed, no files and no host work.
 
-    `keys`: one per seed (`seed_keys(config)` gives a plain run's); `hyper`: the numeric hyperparameters
+    `keys`: one per seed (default `seed_keys(config)`, a plain run's); `hyper`: the numeric hyperparameters
     as leaves (default `Hyper.of(config)`). jit it, or vmap it over keys or over `Hyper` leaves: the runs
     of a vmap go one after another. Each seed runs its cycles as a plain run's cycle does (the same
     per-seed program, seeds one after another), so the metrics are the run's where no plan-table lookup
@@ -234,7 +234,7 @@ def make_train(setup: Setup) -> Callable[..., TrainOutput]:
         out = jax.lax.map(lambda args: run(*args), (keys, hyper))
         return out, jax.tree.map(lambda _: True, out)
 
-    def train(keys: jax.Array, hyper: Hyper | None = None) -> TrainOutput:
-        return run(keys, Hyper.of(config) if hyper is None else hyper)
+    def train(keys: jax.Array | None = None, hyper: Hyper | None = None) -> TrainOutput:
+        return run(seed_keys(config) if keys is None else keys, Hyper.of(config) if hyper is None else hyper)
 
     return train

@@ -17,6 +17,7 @@ from jaxbridge.utils.smoothing import smooth
 
 METRIC_FIELDS = ("test_solve_rate", "train_success_rate", "train_env_steps", "train_decisions", "test_env_steps",
                  "epsilon", "loss", "q_abs_max", "buffer_size", "table_misses")
+METRICS_CSV_FIELDS = (*METRIC_FIELDS, "test_smooth_reward", "train_smooth_reward")  # metrics.csv's columns after seed, cycle
 REPORT_CYCLES = (10, 25, 50, 100)
 STATISTICS_NOTE = (f"over seeds: mean and interquartile mean (IQM), each with its 95% percentile-bootstrap interval "
                    f"({stats.REPS} replicates, fixed generator), min and max")
@@ -32,7 +33,7 @@ def metrics_csv(history: list, seeds: list[int]) -> str:
     test_smooth, train_smooth = smooth(arrays["test_solve_rate"]), smooth(arrays["train_success_rate"])
     out = io.StringIO()
     writer = csv.writer(out)
-    writer.writerow(["seed", "cycle", *METRIC_FIELDS, "test_smooth_reward", "train_smooth_reward"])
+    writer.writerow(["seed", "cycle", *METRICS_CSV_FIELDS])
     for i, seed in enumerate(seeds):
         for c in range(len(history)):
             writer.writerow([seed, c + 1, *(f"{arrays[f][i, c]:.6g}" for f in METRIC_FIELDS),

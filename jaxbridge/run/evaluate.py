@@ -143,26 +143,30 @@ def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0, 
     return policy.config, policy.step, batch, result, (bridge, greedy, controls)
 
 
+def sized_specs_per_seed(seeds: list[int], num_tasks: int, draw) -> dict[int, list]:
+    """{seed: `num_tasks` specs drawn by `draw(rng) -> spec`}, the rng seeded from the seed (seed + 20000:
+    apart from the seed's own training and test draws)."""
+    return {s: [draw(rng) for _ in range(num_tasks)] for s in seeds for rng in [np.random.default_rng(s + 20000)]}
+
+
 def policy_tasks(policy: TrainedPolicy, sized_specs=None, num_tasks: int = 10, max_memory: int | None = None,
-                 seeds: list[int] | None = None) -> TaskBatch:
-    """The batch a policy is evaluated on: each of `seeds`' (default: the run's) test tasks, or
-    `num_tasks` per seed drawn by `sized_specs(rng) -> spec` (rng seeded from the seed; refused with
-    TooBig if their plan tables would exceed `max_memory` bytes or the memory available); with the
-    env's quirks as the run trained."""
+                 seeds: list[int] | None = None, specs: list | None = None) -> TaskBatch:
+    """The batch a policy is evaluated on: each of `seeds`' (default: the run's) test tasks; or
+    `num_tasks` per seed drawn by `sized_specs(rng) -> spec` (`sized_specs_per_seed`); or every spec
+    of `specs` for each seed. Drawn or given tasks are refused with TooBig if their plan tables would
+    exceed `max_memory` bytes or the memory available; the env has its quirks as the run trained."""
     config, env_cls = policy.config, policy.env_cls
     seeds = config.seeds if seeds is None else seeds
-    if sized_specs is None:
+    if sized_specs is None and specs is None:
         batch = evaluation_batch(env_cls, seeds, config.num_test_tasks, protocol=config.test_protocol)
     else:
-        specs, owners = [], []
-        for s in seeds:
-            rng = np.random.default_rng(s + 20000)
-            specs += [sized_specs(rng) for _ in range(num_tasks)]
-            owners += [s] * num_tasks
+        sized = specs is None
+        by_seed = sized_specs_per_seed(seeds, num_tasks, sized_specs) if sized else {s: list(specs) for s in seeds}
+        specs, owners = [t for s in seeds for t in by_seed[s]], [s for s in seeds for _ in by_seed[s]]
         check_evaluation(env_cls, specs, max_memory)
-        sweep = env_cls.novelty_sweep  # its horizon rule scales with the tasks' size
+        sweep = env_cls.novelty_sweep if sized else None  # its horizon rule scales with the tasks' size
         batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None,
-                           progress=SlowWork(f"{env_cls.name}: sized tasks and plan tables"))
+                           progress=SlowWork(f"{env_cls.name}: {'sized' if sized else 'given'} tasks and plan tables"))
     return dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks))
 
 
