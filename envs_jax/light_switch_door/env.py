@@ -82,13 +82,18 @@ TEST_PROTOCOLS = {"jaxbridge": "horizon max(30, h + 5), the paper's",
 def test_tasks(seed: int, num_tasks: int = 10, protocol: str = "jaxbridge") -> list[LightSwitchDoorTask]:
     """N cells and K doors drawn once per seed; each task draws K distinct door cells in 0..8. The
     protocol sets the horizon only (TEST_PROTOCOLS)."""
+    return drawn_test_tasks(seed, num_tasks, protocol, lambda rng, k: tuple(
+        int(c) for c in rng.choice(TEST_DOOR_CELLS, k, replace=False)))
+
+
+def drawn_test_tasks(seed: int, num_tasks: int, protocol: str, door_cells, panel_offset: int = 0) -> list[LightSwitchDoorTask]:
+    """Test tasks of N cells and K doors drawn once per seed, each task's K door cells by
+    `door_cells(rng, K)` (the variants' draws differ only there)."""
     rng = np.random.default_rng(seed + 10000)
     num_cells = int(rng.integers(TEST_CELLS_RANGE[0], TEST_CELLS_RANGE[1] + 1))
     num_doors = int(rng.integers(TEST_DOORS_RANGE[0], TEST_DOORS_RANGE[1] + 1))
     fixed = {"jaxbridge": None, "authors": AUTHORS_HORIZON}[protocol]
-    return [LightSwitchDoorTask(num_cells, tuple(int(c) for c in rng.choice(TEST_DOOR_CELLS, num_doors,
-                                                                             replace=False)), fixed)
-            for _ in range(num_tasks)]
+    return [LightSwitchDoorTask(num_cells, door_cells(rng, num_doors), fixed, panel_offset) for _ in range(num_tasks)]
 
 
 def sized_task(rng: np.random.Generator, num_cells: int, num_doors: int) -> LightSwitchDoorTask:

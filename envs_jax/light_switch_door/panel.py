@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from envs_jax.base import NoveltySweep
-from envs_jax.light_switch_door.env import (AUTHORS_HORIZON, SWEEP_CELLS, SWEEP_DOORS, TEST_CELLS_RANGE, TEST_DOOR_CELLS,
-                                            TEST_DOORS_RANGE, TRAIN_CELLS, LightSwitchDoor, LightSwitchDoorTask)
+from envs_jax.light_switch_door.env import (SWEEP_CELLS, SWEEP_DOORS, TEST_DOOR_CELLS, TRAIN_CELLS, LightSwitchDoor,
+                                            LightSwitchDoorTask, drawn_test_tasks)
 
 PANEL_OFFSET = 1  # a door's keys are one cell before it
 
@@ -40,12 +40,8 @@ def train_task(seed: int) -> LightSwitchDoorTask:
 def test_tasks(seed: int, num_tasks: int = 10, protocol: str = "jaxbridge") -> list[LightSwitchDoorTask]:
     """Light Switch Door's sizes (N cells and K doors drawn once per seed); each task draws K
     non-adjacent door cells in 1..8 (the panels in 0..7). The protocol sets the horizon only."""
-    rng = np.random.default_rng(seed + 10000)
-    num_cells = int(rng.integers(TEST_CELLS_RANGE[0], TEST_CELLS_RANGE[1] + 1))
-    num_doors = int(rng.integers(TEST_DOORS_RANGE[0], TEST_DOORS_RANGE[1] + 1))
-    fixed = {"jaxbridge": None, "authors": AUTHORS_HORIZON}[protocol]
-    return [LightSwitchDoorTask(num_cells, spaced_cells(rng, 1, TEST_DOOR_CELLS - 1, num_doors), fixed, PANEL_OFFSET)
-            for _ in range(num_tasks)]
+    return drawn_test_tasks(seed, num_tasks, protocol, lambda rng, k: spaced_cells(rng, 1, TEST_DOOR_CELLS - 1, k),
+                            PANEL_OFFSET)
 
 
 def sized_task(rng: np.random.Generator, num_cells: int, num_doors: int) -> LightSwitchDoorTask:
