@@ -71,6 +71,9 @@ def parse_args(argv):
                    help="comma-separated approaches to train, or all (default: the paper's figure for the env: "
                         f"the six, {', '.join(APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
                         f"Doorknobs figure; by name only: {', '.join([*PLAN_REPAIR, *LOW_LEVEL])})")
+    p.add_argument("--learner", metavar="NAME", help="what fits the Q-function: dqn (double DQN, the paper's), pqn (no "
+                   "replay or target network; q_lambda, pqn_epochs, pqn_minibatches take --sweep) or package.module:factory "
+                   f"(checked first; docs/NEW_LEARNER.md) (default: {d.learner})")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,
@@ -95,11 +98,10 @@ def parse_args(argv):
     p.add_argument("--sweep", action="append", default=None, metavar="KEY=V1,V2,...",
                    help="train every approach at each of these values of a hyperparameter (repeat for a grid: "
                         "the cartesian product), each setting its own run directory approach@KEY=V,... with a row "
-                        "in results.md and a line in curves.png. Settings that differ only in learning_rate, "
-                        "gamma, grad_clip, call_planner_bonus or the epsilon schedule share one compiled program "
-                        "(as leaves, seeds x settings side by side); other keys (n_sample, hidden_sizes as 64x64, "
-                        "updates_per_cycle, polyak_tau, ...) compile one per value. Each run's numbers are those "
-                        "of a plain run with its setting (default: none)")
+                        "in results.md and a line in curves.png. Settings that differ only in learning_rate, gamma, grad_clip, "
+                        "call_planner_bonus, q_lambda or the epsilon schedule share one compiled program (as leaves, "
+                        "seeds x settings side by side); other keys (n_sample, hidden_sizes as 64x64, updates_per_cycle, "
+                        "polyak_tau, ...) compile one per value. Each run's numbers are a plain run's (default: none)")
     p.add_argument("--out", type=Path, default=Path("runs"), help="parent of run directories (default: %(default)s)")
     p.add_argument("--name", default=None, help="experiment directory name under --out (default: the env name)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing experiment directory of the same name")
@@ -115,15 +117,13 @@ def parse_args(argv):
                         "--xla_force_host_platform_device_count=K takes precedence). Seeds need not divide evenly. "
                         "Results do not depend on it (default: %(default)s)")
     p.add_argument("--seed-block", type=positive_int,
-                   help="seeds computed side by side (vmapped) on each device, for GPUs (not yet measured on one); "
-                        "1 runs them one after another, which keeps each seed's numbers independent of every other "
-                        "seed, and on 2 CPU cores was as fast as blocks (docs/PERFORMANCE.md). Results depend on "
-                        f"the block (not on --devices) (default: {d.seed_block})")
+                   help="seeds computed side by side (vmapped) on each device, for GPUs; 1 runs them one after another, "
+                        "so each seed's numbers depend on no other seed (on 2 CPU cores as fast as blocks; "
+                        f"docs/PERFORMANCE.md). Results depend on the block, not on --devices (default: {d.seed_block})")
     p.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
                    help="refuse a run whose memory estimate (learner states, replay buffers, tasks and plan tables) "
                         "exceeds this many GiB (default: the memory available when it starts)")
-    p.add_argument("--debug", action="store_true",
-                   help="show the tracebacks and orbax's own messages behind an error (default: one line)")
+    p.add_argument("--debug", action="store_true", help="show the tracebacks and orbax's messages behind an error")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (one summary line at the end)")
     p.add_argument("--tensorboard", action="store_true",
                    help="also write TensorBoard event files (tensorboardX) into each approach's run directory, "

@@ -20,7 +20,7 @@ def greedy_test_rollout(setup, learners, num_seeds: int, num_tests: int):
     """Every seed's greedy bridge on its test tasks, recorded: (EpisodeResult, StepRecord [T, episodes]);
     episode i is seed i // num_tests's task i % num_tests."""
     owner = np.repeat(np.arange(num_seeds), num_tests)
-    greedy = episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
+    greedy = episode_params(setup, learners, owner, jnp.zeros(len(owner), jnp.float32))
     keys = jax.random.split(jax.random.key(123), len(owner))
     env = setup.test_env
     return rollout(env, setup.bridge(env), greedy, setup.test.arrays, keys, setup.test.max_steps, record=True,
@@ -36,7 +36,7 @@ def main() -> None:
     setup, learners, rates = train_seeds(config)
     print_digits(config.seeds, rates)
 
-    test, env, net = setup.test, setup.test_env, setup.dqn.net
+    test, env, net = setup.test, setup.test_env, setup.learner.net
     result, records = greedy_test_rollout(setup, learners, config.num_seeds, config.num_test_tasks)
     names = env.skill_names + ("CallPlanner",)
     success = np.asarray(result.success)

@@ -53,7 +53,7 @@ def main() -> None:
     print(reliability(rates, 0.95))
 
     features = jnp.asarray(offset_grid())
-    env, net = setup.test_env, setup.dqn.net
+    env, net = setup.test_env, setup.learner.net
     wrong, not_open = [], []
     for s, seed in enumerate(config.seeds):
         q_params = jax.tree.map(lambda x, s=s: x[s], learners.online)

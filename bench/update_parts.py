@@ -42,7 +42,7 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
     config = TrainConfig.for_env(env_name, approach=approach, num_seeds=1, updates_per_cycle=updates,
                                  split_task_state=split)
     setup = make_setup(config)
-    env, learning = setup.train_env, setup.dqn
+    env, learning = setup.train_env, setup.learner
     tasks = setup.train.arrays.tasks  # the seed's training tasks, which a split buffer's `task` indexes
     task = learning.task_part(tasks)
     learner = jax.tree.map(lambda x: x[0], setup.init_learners())
@@ -74,7 +74,8 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
 
     def adam(state):
         params, opt_state = state
-        step, opt_state = optimizer.update(params, opt_state, params)
+        step, opt_state = optimizer.update(params, opt_state, params, max_norm=config.grad_clip,
+                                           learning_rate=config.learning_rate)
         return optax.apply_updates(params, step), opt_state
 
     per_update = lambda s: 1e6 * s / updates

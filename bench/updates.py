@@ -27,7 +27,7 @@ def measure_updates(setup, seeds, learners, updates: int, repeats: int = 3) -> d
     from jaxbridge.learn.hyper import Hyper
 
     config = replace(setup.config, updates_per_cycle=updates)
-    learning = replace(setup.dqn, config=config)
+    learning = replace(setup.learner, config=config)
 
     def per_seed(learner, targets):
         key, indices = minibatch_indices(config, learner)

@@ -102,8 +102,8 @@ def test_learning_raises_the_q_of_the_oracles_fix_at_the_stuck_state_and_makes_i
     candidates = candidate_skills(env_obj, setup.config.n_sample)
     for i in range(SEEDS):
         before, after = (jax.tree.map(lambda x: x[i], run.learners[c].online) for c in (0, -1))
-        fix = lambda q: float(setup.dqn.net.apply(q, encode(env_obj, features[i], skill[i], param[i])))
-        greedy, _ = best_candidate(env_obj, setup.dqn.net, after, features[i], num_ground[i], candidates,
+        fix = lambda q: float(setup.learner.net.apply(q, encode(env_obj, features[i], skill[i], param[i])))
+        greedy, _ = best_candidate(env_obj, setup.learner.net, after, features[i], num_ground[i], candidates,
                                    jax.random.key(i))
         assert fix(after) >= fix(before) + 0.01, (i, fix(before), fix(after))
         assert int(greedy.skill) == skill[i] and abs(float(greedy.param) - param[i]) <= 0.1, (i, greedy, param[i])

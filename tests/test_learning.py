@@ -17,7 +17,8 @@ from jaxbridge.core.bridges import RandomBridge, make_bridge
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh
 from jaxbridge.learn.hyper import Hyper
-from jaxbridge.learn.dqn import epsilon, init_learner, learn, make_dqn, minibatch_indices, td_targets
+from jaxbridge.learn.dqn import init_learner, learn, make_dqn, minibatch_indices, td_targets
+from jaxbridge.learn.learner import epsilon
 from jaxbridge.core.meta_policy import Controls, rollout
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
@@ -377,7 +378,7 @@ def test_checkpoint_round_trip_restores_identical_greedy_actions(tiny_twice, tmp
     assert step == 3 and record == {"cycle": 3}
     as_data = lambda tree: jax.tree.leaves(tree.replace(key=jax.random.key_data(tree.key)))
     assert all(np.array_equal(x, y) for x, y in zip(as_data(learners), as_data(restored)))
-    net, skills = setup.dqn.net, candidate_skills(ENV, 10)
+    net, skills = setup.learner.net, candidate_skills(ENV, 10)
     features = jax.random.uniform(jax.random.key(5), (32, ENV.num_features))
     ground = jnp.ones((32, ENV.num_skills + 1), jnp.int32)
     keys = jax.random.split(jax.random.key(6), 32)

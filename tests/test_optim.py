@@ -14,7 +14,6 @@ from run_helpers import TEST_XLA_FLAGS
 
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh
-from jaxbridge.learn.dqn import make_optimizer
 from jaxbridge.learn.optim import clipped_adam
 
 MAX_NORM, LR = 5.0, 1e-3
@@ -94,4 +93,4 @@ if __name__ == "__main__":  # the learner's optimiser; --optax: optax's, to see 
     jax.config.update("jax_num_cpu_devices", 2)
     print(len(jax.local_devices()), blocks_on_one_and_two_devices(
         optax.chain(optax.clip_by_global_norm(MAX_NORM), optax.adam(LR)) if "--optax" in sys.argv
-        else make_optimizer(TrainConfig())))
+        else clipped_adam(TrainConfig().grad_clip, TrainConfig().learning_rate)))

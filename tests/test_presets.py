@@ -28,14 +28,14 @@ AUTHORS_N_SAMPLE = {"light_switch_door": 100, "doorknobs": 10, "coffee": 10}
 def test_the_authors_preset_reaches_the_learner_and_its_bridge(env):
     config, _ = make_config({"env": env, "preset": "authors", "num_seeds": 1})
     setup = make_setup(config)
-    learner_config = setup.dqn.config  # what the updates, targets and polyak steps read
+    learner_config = setup.learner.config  # what the updates, targets and polyak steps read
     expected = {**AUTHORS, "n_sample": AUTHORS_N_SAMPLE[env], "preset": "authors"}
-    assert setup.dqn.net.normalise and setup.init_learners().norm is not None  # min-max scaling
+    assert setup.learner.net.normalise and setup.init_learners().norm is not None  # min-max scaling
     assert {k: getattr(learner_config, k) for k in expected} == expected
     assert setup.bridge(setup.test_env).n_sample == AUTHORS_N_SAMPLE[env] and not setup.bridge(setup.test_env).stratified
     assert set(setup.train_env.quirks) == set(config.env_quirks)  # every env-level quirk it has, switched on
     assert all(getattr(setup.train_env, q) and getattr(setup.test_env, q) for q in config.env_quirks)
-    assert setup.dqn.net.ensemble == 1 and not setup.controls.loop_guard
+    assert setup.learner.net.ensemble == 1 and not setup.controls.loop_guard
     assert config.to_dict()["preset"] == "authors"  # config.json records it with every resolved value
 
 
@@ -112,7 +112,7 @@ def test_flags_override_the_preset_and_bad_names_are_refused():
 def test_the_authors_preset_builds_their_network_exploration_and_target():
     config, _ = make_config({"env": "light_switch_door", "preset": "authors", "num_seeds": 1})
     setup = make_setup(config)
-    assert setup.dqn.net.activation == "relu" and setup.bridge(setup.test_env).explore_ground_operators
+    assert setup.learner.net.activation == "relu" and setup.bridge(setup.test_env).explore_ground_operators
     assert (config.target_init, config.reset_optimizer) == ("apart", True)
 
 
@@ -166,7 +166,7 @@ def test_the_optimizer_is_new_for_each_cycles_fit_only_when_asked(reset):
     learner = jax.tree.map(lambda x: x[0], setup.init_learners())
     clip, (adam, scale) = learner.opt_state
     learner = learner.replace(opt_state=(clip, (adam._replace(count=jnp.int32(57)), scale)))
-    after, _, _ = jax.jit(lambda l: learn(setup.dqn, Hyper.of(setup.config), l, jnp.int32(0)))(learner)  # empty buffer: no update
+    after, _, _ = jax.jit(lambda l: learn(setup.learner, Hyper.of(setup.config), l, jnp.int32(0)))(learner)  # empty buffer: no update
     assert int(after.opt_state[1][0].count) == (0 if reset else 57)
 
 
@@ -189,7 +189,7 @@ def test_minmax_scaling_is_fitted_to_the_stored_inputs_and_targets_and_scales_th
     from jaxbridge.learn.q_bridge import encode
     config = TrainConfig.for_env("light_switch_door", "authors", num_seeds=1)
     setup = make_setup(config)
-    dqn, learner = setup.dqn, jax.tree.map(lambda x: x[0], setup.init_learners())
+    dqn, learner = setup.learner, jax.tree.map(lambda x: x[0], setup.init_learners())
     empty = fit_scaling(dqn, learner.buffer, jnp.zeros(config.buffer_capacity), None)
     assert not np.asarray(empty["x_shift"]).any() and (np.asarray(empty["x_scale"]) == 1).all()
     rng = np.random.default_rng(0)
@@ -220,7 +220,7 @@ def test_minmax_scaling_of_a_split_full_state_equals_scaling_the_whole_input():
     from jaxbridge.learn.q_bridge import SplitInput, TaskPart, encode, encode_action
     config = TrainConfig.for_env("doorknobs", "authors", num_seeds=1, approach="maple_q")
     setup = make_setup(config)
-    dqn, learner = setup.dqn, jax.tree.map(lambda x: x[0], setup.init_learners())
+    dqn, learner = setup.learner, jax.tree.map(lambda x: x[0], setup.init_learners())
     split, width = dqn.split, dqn.num_features + dqn.env.num_skills + 2
     rng = np.random.default_rng(1)
     norm = {"x_shift": jnp.asarray(rng.uniform(-1, 1, width), jnp.float32),
@@ -257,7 +257,7 @@ def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_r
     learners, _ = cycle(cycle.seeds.place(setup.init_learners()))  # one cycle: a filled buffer
     learner = jax.tree.map(lambda x: x[0], cycle.seeds.unpad(learners))
     assert learner.buffer.size > 0 and config.fit_patience < int(learner.updates) <= config.updates_per_cycle
-    dqn, hyper = setup.dqn, Hyper.of(setup.config)
+    dqn, hyper = setup.learner, Hyper.of(setup.config)
     targets = relabel(dqn, hyper, learner, jax.random.key(3), None)
     fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn, hyper, l, targets, None))(learner)
 
@@ -277,7 +277,7 @@ def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_r
         np.testing.assert_allclose(restored, expected, rtol=1e-4, atol=1e-6)
     assert not all(np.allclose(a, b) for a, b in zip(jax.tree.leaves(fitted.params), jax.tree.leaves(current.params)))
     capped = dataclasses.replace(config, fit_patience=10**6, updates_per_cycle=37)
-    dqn_capped = make_setup(capped).dqn
+    dqn_capped = make_setup(capped).learner
     fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn_capped, hyper, l, targets, None))(learner)
     assert int(fitted.updates - learner.updates) == 37
 

@@ -19,7 +19,7 @@ from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.stats import cell_text
 
 # train.py flags that set the run's config (flag name = config field); --resume takes the saved config.
-CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "num_seeds", "first_seed", "cycles", "episodes_per_cycle",
+CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "learner", "num_seeds", "first_seed", "cycles", "episodes_per_cycle",
                 "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus", "checkpoint_every", "seed_block",
                 "low_level_budget")
 
@@ -45,9 +45,25 @@ def make_config(flags: dict) -> tuple[TrainConfig, type]:
         config.check_buffer_fits()
     except ValueError as err:
         raise UsageError(f"--episodes-per-cycle: {err}") from None
+    check_learner_spec(config, env_cls)
     if config.seed_block > config.num_seeds:
         raise UsageError(f"--seed-block {config.seed_block} is larger than the {config.num_seeds} seeds")
     return config, env_cls
+
+
+def check_learner_spec(config: TrainConfig, env_cls) -> None:
+    """Refuse a --learner that does not load or make a learner, and one of your own that breaks the learner
+    contract (learn/learner.check_learner: shapes only, nothing is computed)."""
+    from jaxbridge.learn.learner import LearnerContractError, check_learner
+    from jaxbridge.learn.learners import learner_factory, registered
+    from jaxbridge.learn.setup import make_setup
+    try:
+        learner_factory(config.learner)
+        learner = make_setup(dataclasses.replace(config, approach="ours"), env_cls).learner
+        if config.learner not in registered():
+            check_learner(learner, config)
+    except (ValueError, LearnerContractError) as err:
+        raise UsageError(f"--learner: {err}") from None
 
 
 def check_reachable(config: TrainConfig, env_cls) -> None:

@@ -15,8 +15,9 @@ from dataclasses import dataclass
 # which their defaults are); 5: `output_init` (older runs started their output layer at zero); 6:
 # `env_quirks`, `normalise`, `fit_patience`, `param_samples` (older runs had none of them: their defaults);
 # 7: `loop_guard` (older runs had none); 8: `low_level_budget` (older runs had no low-level baselines);
-# 9: `feature_noise` (older runs had none); 10: `step_gamma` (older runs had none)
-CONFIG_VERSION = 10
+# 9: `feature_noise` (older runs had none); 10: `step_gamma` (older runs had none); 11: `learner`, `q_lambda`,
+# `pqn_epochs`, `pqn_minibatches` (older runs were double DQN)
+CONFIG_VERSION = 11
 
 
 # The numeric hyperparameters that change no shape or program: pytree leaves of the cycle
@@ -24,7 +25,7 @@ CONFIG_VERSION = 10
 # XLA fuses a traced tau's products into multiply-adds other than a constant's, so a slot's last bits
 # would differ from a plain run's; a sweep over it compiles a program per value.
 LEAF_FIELDS = ("learning_rate", "gamma", "grad_clip", "call_planner_bonus", "epsilon_start", "epsilon_end",
-               "epsilon_decay")
+               "epsilon_decay", "q_lambda")
 
 # The numeric fields' ranges, checked whenever a config is made: (low, high, low inclusive).
 RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip": (0, None, False),
@@ -36,7 +37,8 @@ RANGES = {"learning_rate": (0, None, False), "gamma": (0, 1, True), "grad_clip":
           "step_gamma": (0, 1, False), "q_ensemble": (1, None, True), "n_sample": (1, None, True),
           "n_target_sample": (1, None, True),
           "buffer_capacity": (1, None, True), "checkpoint_every": (1, None, True), "seed_block": (1, None, True),
-          "first_seed": (0, None, True)}
+          "first_seed": (0, None, True), "q_lambda": (0, 1, True), "pqn_epochs": (1, None, True),
+          "pqn_minibatches": (1, None, True)}
 
 # The string options, resolved to these typed values when a config is made: each member equals its
 # string (config.json and --sweep keep the strings), and the code below compares members, not text.
@@ -200,6 +202,17 @@ class TrainConfig:
     (`full_state_varying` of the env) and multiply the task's constants once per task in the first layer:
     the same network up to float rounding, a fraction of the buffer and the arithmetic (Doorknobs: 152 of
     2027 values)."""
+    learner: str = "dqn"
+    """What fits the bridge's Q-function (jaxbridge/learn/learners.py): "dqn", double DQN with a replay buffer
+    and a target network (the paper's); "pqn", PQN (Gallici et al. 2024): no replay buffer and no target
+    network, LayerNorm in the Q-network, Q(lambda) targets over each cycle's own decisions; or
+    package.module:factory for a learner of your own (docs/NEW_LEARNER.md)."""
+    q_lambda: float = 0.65
+    """PQN: the lambda of its Q(lambda) targets (0: one-step targets; 1: Monte Carlo returns)."""
+    pqn_epochs: int = 4
+    """PQN: passes over a cycle's decisions, each in `pqn_minibatches` minibatches (a fresh shuffle each)."""
+    pqn_minibatches: int = 4
+    """PQN: minibatches per pass over a cycle's decisions."""
     checkpoint_every: int = 10
     """Save the learner state every this many cycles (and after the last one)."""
 
@@ -230,7 +243,7 @@ class TrainConfig:
             data.setdefault("approach", "ours")
         if version in (1, 2):
             data.setdefault("split_task_state", False)
-        elif version not in (3, 4, 5, 6, 7, 8, 9, CONFIG_VERSION):
+        elif version not in (3, 4, 5, 6, 7, 8, 9, 10, CONFIG_VERSION):
             raise ValueError(f"config version {version} is not supported (this release reads versions 1 to {CONFIG_VERSION})")
         if version < 7:  # runs before version 7 had no loop guard
             data.setdefault("loop_guard", False)

@@ -1,4 +1,5 @@
-"""Double DQN for the bridge policy: learner state, epsilon schedule, targets, minibatch updates."""
+"""Double DQN for the bridge policy (the paper's learner): state, targets, minibatch updates, and the learner
+contract's methods over them (learn/learner.py)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -15,14 +16,14 @@ from jaxbridge.core.config import Normalise, ParamSamples, PolyakPer, TargetInit
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
-                                      candidate_skills, encode_action, input_size)
-from jaxbridge.learn.replay import ReplayBuffer, init_buffer, sample_indices
+                                      candidate_skills, encode_action, input_size, task_state_split)
+from jaxbridge.learn.replay import ReplayBuffer, add, init_buffer, sample_indices
 from jaxbridge.learn.transitions import Transition, for_buffer, successor_features
 
 
 @struct.dataclass
-class Learner:
-    """Everything one seed's learning needs to continue exactly where it stopped."""
+class DQNState:
+    """Everything one seed's double DQN needs to continue exactly where it stopped."""
 
     params: Any
     target_params: Any
@@ -52,7 +53,7 @@ class DQN:
     env: NoveltyEnv  # the training env: its capacity fixes the shapes
     config: TrainConfig
     net: QNetwork
-    optimizer: optax.GradientTransformation
+    optimizer: optax.GradientTransformationExtraArgs  # built once; each update gets the hyperparameter leaves
     num_features: int  # the approach's observation width (object-centric features or the full state)
     # A wide observation's task-constant entries, split off (None: the buffer stores whole observations).
     split: StateSplit | None = None
@@ -74,23 +75,47 @@ class DQN:
         values = jax.vmap(lambda task: self.env.full_state(self.env.reset(task))[constant])(tasks)
         return TaskPart(values=values, index=jnp.zeros((), jnp.int32), split=self.split)
 
+    # The learner contract (learn/learner.QLearner), over the functions below.
+    @property
+    def shares_network(self) -> bool:
+        # The split approaches give a seed's network to the rollouts once (fast matrix products); the
+        # others keep a copy per episode, the layout their published numbers were computed with.
+        return self.split is not None
+
+    def init(self, key: jax.Array) -> DQNState:
+        return init_learner(self, key)
+
+    def greedy(self, state: DQNState) -> Any:
+        return state.online
+
+    def observe(self, hyper: Hyper, state: DQNState, transitions: Transition, valid: jax.Array) -> DQNState:
+        """One transition per bridge decision into the replay buffer, episode after episode."""
+        flat = lambda x: x.reshape((-1,) + x.shape[2:])
+        return state.replace(buffer=add(state.buffer, jax.tree.map(flat, stored_transitions(self, transitions)),
+                                        flat(valid)))
+
+    def learn(self, hyper: Hyper, state: DQNState, decisions: jax.Array, tasks: Any
+              ) -> tuple[DQNState, jax.Array, jax.Array]:
+        return learn(self, hyper, state, decisions, tasks)
+
+    def stored(self, state: DQNState) -> jax.Array:
+        return state.buffer.size
+
 
 def q_network(config: TrainConfig) -> QNetwork:
     return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
                     normalise=config.normalise is Normalise.MINMAX)
 
 
-def make_optimizer(hyper: Hyper | TrainConfig) -> optax.GradientTransformation:
-    return clipped_adam(hyper.grad_clip, hyper.learning_rate)
-
-
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
-    return DQN(env, config, q_network(config), make_optimizer(config), num_features, split, choose_fit(config))
+    return DQN(env, config, q_network(config), clipped_adam(), num_features, split, choose_fit(config))
 
 
-def epsilon(hyper: Hyper | TrainConfig, decisions: jax.Array) -> jax.Array:
-    """Linear annealing per training bridge decision, floored at epsilon_end."""
-    return jnp.maximum(hyper.epsilon_end, hyper.epsilon_start - hyper.epsilon_decay * decisions)
+def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> DQN:
+    """The learner registry's factory (learn/learners.py): with a full-state observation the buffer keeps
+    only its entries that change within a task (`split_task_state`)."""
+    split = task_state_split(env) if full_state and config.split_task_state else None
+    return make_dqn(config, env, num_features, split)
 
 
 def stored_transitions(dqn: DQN, transitions: Transition) -> Transition:
@@ -115,7 +140,7 @@ def empty_transition(dqn: DQN) -> Transition:
                                  steps=jnp.int32(0) if dqn.config.counts_steps else None))
 
 
-def init_learner(dqn: DQN, key: jax.Array) -> Learner:
+def init_learner(dqn: DQN, key: jax.Array) -> DQNState:
     """A fresh network, its target (a copy, or with `target_init` "apart" another draw), optimiser and
     empty replay buffer."""
     k_init, k_run = jax.random.split(key)
@@ -125,7 +150,7 @@ def init_learner(dqn: DQN, key: jax.Array) -> Learner:
     params, norm = {"params": variables["params"]}, variables.get("norm")  # the scaling is not a parameter
     target = (jax.tree.map(jnp.copy, params) if dqn.config.target_init is TargetInit.COPY
               else {"params": dqn.net.init(jax.random.fold_in(k_init, 1), sample)["params"]})
-    return Learner(params=params, target_params=target,
+    return DQNState(params=params, target_params=target,
                    opt_state=dqn.optimizer.init(params),
                    buffer=init_buffer(empty_transition(dqn), dqn.config.buffer_capacity),
                    key=k_run,
@@ -160,7 +185,7 @@ def td_targets(dqn: DQN, hyper: Hyper, params: Any, target_params: Any, batch: T
 RELABEL_CHUNK = 1024
 
 
-def relabel(dqn: DQN, hyper: Hyper, learner: Learner, key: jax.Array, task: TaskPart | None = None) -> jax.Array:
+def relabel(dqn: DQN, hyper: Hyper, learner: DQNState, key: jax.Array, task: TaskPart | None = None) -> jax.Array:
     """float32[capacity]: TD targets of every stored transition, recomputed once per cycle with the
     current nets (as the authors' code does), in chunks up to the buffer's fill level."""
     buffer = learner.buffer
@@ -203,8 +228,8 @@ def fit_scaling(dqn: DQN, buffer: ReplayBuffer, targets: jax.Array, task: TaskPa
             "y_shift": jnp.where(empty, 0.0, y_low), "y_scale": jnp.where(empty, 1.0, jnp.maximum(y_high - y_low, 1.0))}
 
 
-def update_step(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array, index: jax.Array,
-                task: TaskPart | None = None) -> tuple[Learner, jax.Array]:
+def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, index: jax.Array,
+                task: TaskPart | None = None) -> tuple[DQNState, jax.Array]:
     """One Adam step on the minibatch of (transition, target) at buffer slots `index`, then a polyak
     step of the target net."""
     env, config, net = dqn.env, dqn.config, dqn.net
@@ -224,7 +249,8 @@ def update_step(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array, in
         return jnp.mean(error ** 2), jnp.max(jnp.abs(q))  # every member fits the targets
 
     (loss, q_abs_max), grads = jax.value_and_grad(loss_fn, has_aux=True)(learner.params)
-    updates, opt_state = make_optimizer(hyper).update(grads, learner.opt_state, learner.params)
+    updates, opt_state = dqn.optimizer.update(grads, learner.opt_state, learner.params, max_norm=hyper.grad_clip,
+                                             learning_rate=hyper.learning_rate)
     params = optax.apply_updates(learner.params, updates)
     target = learner.target_params
     if config.polyak_per is PolyakPer.UPDATE:
@@ -234,8 +260,8 @@ def update_step(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array, in
     return learner, (loss, q_abs_max)
 
 
-def fit_until_no_better(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array,
-                        task: TaskPart | None) -> tuple[Learner, jax.Array, jax.Array]:
+def fit_until_no_better(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,
+                        task: TaskPart | None) -> tuple[DQNState, jax.Array, jax.Array]:
     """The authors' fit (reference/method.md §5): minibatch updates until `fit_patience` of them in a row
     found no lower minibatch loss, or `updates_per_cycle` were made, then the weights that scored the
     lowest loss are restored (those a minibatch was evaluated with, before its step). Each seed stops on
@@ -262,7 +288,7 @@ def fit_until_no_better(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.A
     return learner.replace(params=best_params), loss_sum / jnp.maximum(done, 1).astype(jnp.float32), q_abs
 
 
-def minibatch_indices(config: TrainConfig, learner: Learner) -> tuple[jax.Array, jax.Array]:
+def minibatch_indices(config: TrainConfig, learner: DQNState) -> tuple[jax.Array, jax.Array]:
     """(the key after the updates, int32[updates_per_cycle, batch_size]: each update's buffer slots).
 
     Update u's slots come from the u-th key of a chain of splits, uniformly over the stored items. All
@@ -276,7 +302,7 @@ def minibatch_indices(config: TrainConfig, learner: Learner) -> tuple[jax.Array,
     return key, jax.vmap(lambda k: sample_indices(learner.buffer, k, config.batch_size))(sample_keys)
 
 
-def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) -> Learner:
+def track_target(config: TrainConfig, learner: DQNState, decisions: jax.Array) -> DQNState:
     """The authors' polyak schedule: one soft update of the target towards the online net per training
     bridge decision, i.e. (1 - tau)^decisions of the old target is kept."""
     if config.polyak_per is not PolyakPer.DECISION:
@@ -286,8 +312,8 @@ def track_target(config: TrainConfig, learner: Learner, decisions: jax.Array) ->
     return learner.replace(target_params=target)
 
 
-def learn(dqn: DQN, hyper: Hyper, learner: Learner, decisions: jax.Array,
-          tasks: Any = None) -> tuple[Learner, jax.Array, jax.Array]:
+def learn(dqn: DQN, hyper: Hyper, learner: DQNState, decisions: jax.Array,
+          tasks: Any = None) -> tuple[DQNState, jax.Array, jax.Array]:
     """After a cycle's episodes (`decisions` training bridge decisions): track the target net, relabel
     the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty). `tasks`:
     the training tasks the buffer's `task` indices refer to (needed with a split); `hyper`: the numeric
@@ -306,8 +332,8 @@ def learn(dqn: DQN, hyper: Hyper, learner: Learner, decisions: jax.Array,
     return dqn.fit(dqn, hyper, learner, targets, task)
 
 
-def fixed_updates(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array,
-                  task: TaskPart | None) -> tuple[Learner, jax.Array, jax.Array]:
+def fixed_updates(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,
+                  task: TaskPart | None) -> tuple[DQNState, jax.Array, jax.Array]:
     """Ours' fit: exactly `updates_per_cycle` minibatch updates (none take effect while the buffer is
     empty). Returns as `learn`."""
     ready = learner.buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
@@ -325,8 +351,8 @@ def fixed_updates(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array,
     return learner, jnp.mean(losses), jnp.max(q_abs)
 
 
-def no_updates(dqn: DQN, hyper: Hyper, learner: Learner, targets: jax.Array,
-               task: TaskPart | None) -> tuple[Learner, jax.Array, jax.Array]:
+def no_updates(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,
+               task: TaskPart | None) -> tuple[DQNState, jax.Array, jax.Array]:
     """`updates_per_cycle` 0: the learner as it is, zero loss and |Q|."""
     return learner, jnp.float32(0.0), jnp.float32(0.0)
 

@@ -25,6 +25,7 @@ class Hyper:
     epsilon_start: jax.Array
     epsilon_end: jax.Array
     epsilon_decay: jax.Array
+    q_lambda: jax.Array
 
     @classmethod
     def of(cls, config: TrainConfig) -> "Hyper":

@@ -1,4 +1,4 @@
-"""The online learning loop: per cycle, training episodes, double-DQN updates, greedy test evaluation.
+"""The online learning loop: per cycle, training episodes, the learner's updates, greedy test evaluation.
 
 One jitted `cycle` runs a whole cycle for every seed: the seed axis is sharded over the devices and
 each device runs the same per-seed cycle on its seeds one after another (learn/devices.py says why
@@ -9,8 +9,7 @@ nothing inside a cycle touches the host.
 """
 from __future__ import annotations
 
-from functools import partial
-from typing import Callable
+from typing import Any, Callable
 
 import jax
 import jax.numpy as jnp
@@ -22,10 +21,9 @@ from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import TaskArrays
 from jaxbridge.learn.approaches import BridgeKind
 from jaxbridge.learn.devices import SeedMesh
-from jaxbridge.learn.dqn import Learner, epsilon, init_learner, learn, stored_transitions
 from jaxbridge.learn.hyper import Hyper
+from jaxbridge.learn.learner import epsilon
 from jaxbridge.learn.q_bridge import QBridgeParams
-from jaxbridge.learn.replay import add
 from jaxbridge.learn.setup import Setup
 from jaxbridge.learn.transitions import episode_transitions
 
@@ -46,10 +44,11 @@ class CycleMetrics:
     table_misses: jax.Array  # planner lookups answered by the host planner (train + test)
 
 
-def episode_params(learners: Learner, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:
-    """Bridge parameters for a batch of episodes: each episode gets its seed's network (owner[i] is the
-    seed index of episode i) and exploration rate eps[i] (zeros for the greedy bridge)."""
-    return QBridgeParams(q=jax.tree.map(lambda x: x[owner], learners.online), epsilon=eps)
+def episode_params(setup: Setup, learners: Any, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:
+    """Bridge parameters for a batch of episodes: each episode gets its seed's greedy network (owner[i] is
+    the seed index of episode i; `learners` are the seeds' states) and exploration rate eps[i] (zeros for
+    the greedy bridge)."""
+    return QBridgeParams(q=jax.tree.map(lambda x: x[owner], jax.vmap(setup.learner.greedy)(learners)), epsilon=eps)
 
 
 def _repeat(params, n: int):
@@ -63,20 +62,17 @@ def _by_seed(tree, seeds: int):
 
 
 def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
-    """One seed's cycle: (learner, its training TaskArrays, its test TaskArrays, its Hyper) -> (learner,
-    CycleMetrics of scalars). The same computation for every seed and setting. Without `host_planner`
-    its rollouts leave states missing from the plan tables unplanned (meta_policy.rollout): exact only
-    where the metrics report no table miss."""
-    config, approach, test = setup.config, setup.approach, setup.test
+    """One seed's cycle: (learner state, its training TaskArrays, its test TaskArrays, its Hyper) -> (learner
+    state, CycleMetrics of scalars), against the learner contract (learn/learner.py). The same computation
+    for every seed and setting. Without `host_planner` its rollouts leave states missing from the plan
+    tables unplanned (meta_policy.rollout): exact only where the metrics report no table miss."""
+    config, approach, test, learning = setup.config, setup.approach, setup.test, setup.learner
     controls = setup.controls
     train_env, test_env = setup.train_env, setup.test_env  # the task batches' envs, with the config's quirks
     train_bridge, test_bridge = setup.bridge(train_env), setup.bridge(test_env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train_env.num_skills
-    # Every episode of a seed's cycle has the seed's network: the split approaches give it to the rollouts
-    # once (fast matrix products); the others keep a copy per episode, the layout their published numbers
-    # were computed with (the products sum in another order, so sharing would change their last bits).
-    shared = setup.dqn.split is not None
+    shared = learning.shares_network  # one copy of the seed's network for its episodes, or one each
 
     def bridge_params(params, eps: jax.Array, n: int) -> QBridgeParams:
         if shared:
@@ -84,29 +80,28 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
         return QBridgeParams(q=_repeat(params, n), epsilon=jnp.full(n, eps, jnp.float32))
     config.check_buffer_fits()
 
-    def seed_cycle(learner: Learner, train_tasks: TaskArrays, test_tasks: TaskArrays,
-                   hyper: Hyper) -> tuple[Learner, CycleMetrics]:
+    def seed_cycle(learner: Any, train_tasks: TaskArrays, test_tasks: TaskArrays,
+                   hyper: Hyper) -> tuple[Any, CycleMetrics]:
         k_next, k_train, k_learn, k_test = jax.random.split(learner.key, 4)
 
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
         eps = epsilon(hyper, learner.decisions)
-        explore = bridge_params(learner.online, eps, episodes)
+        explore = bridge_params(learning.greedy(learner), eps, episodes)
         result, records = rollout(train_env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
                                   config.train_steps, record=approach.learns, controls=controls, shared_params=shared,
                                   host_planner=host_planner)
         decisions = result.bridge_decisions.sum()
 
         if approach.learns:
-            # 2. One transition per bridge decision into the replay buffer.
+            # 2. One transition per bridge decision, to the learner.
             transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None, None, None))(
                 records, result.success, call_planner, hyper.call_planner_bonus, config.counts_steps,
                 controls.plan_progress)
-            flat = lambda x: x.reshape((-1,) + x.shape[2:])
-            buffer = add(learner.buffer, jax.tree.map(flat, stored_transitions(setup.dqn, transitions)), flat(valid))
-            learner = learner.replace(buffer=buffer, decisions=learner.decisions + decisions, key=k_learn)
+            learner = learning.observe(hyper, learner, transitions, valid)
+            learner = learner.replace(decisions=learner.decisions + decisions, key=k_learn)
 
-            # 3. Double-DQN updates.
-            learner, loss, q_abs_max = learn(setup.dqn, hyper, learner, decisions, train_tasks.tasks)
+            # 3. The learner's updates.
+            learner, loss, q_abs_max = learning.learn(hyper, learner, decisions, train_tasks.tasks)
         else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
             learner = learner.replace(decisions=learner.decisions + decisions)
             eps = jnp.float32(1.0 if approach.bridge is BridgeKind.RANDOM else 0.0)
@@ -114,14 +109,14 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
         learner = learner.replace(key=k_next)
 
         # 4. Greedy evaluation on the seed's test tasks.
-        greedy = bridge_params(learner.online, jnp.float32(0.0), num_tests)
+        greedy = bridge_params(learning.greedy(learner), jnp.float32(0.0), num_tests)
         tested, _ = rollout(test_env, test_bridge, greedy, test_tasks, jax.random.split(k_test, num_tests),
                             test.max_steps, controls=controls, shared_params=shared, host_planner=host_planner)
 
         metrics = CycleMetrics(
             test_solve_rate=tested.success.mean(), train_success_rate=result.success.mean(),
             train_env_steps=result.steps.sum(), train_decisions=decisions, test_env_steps=tested.steps.sum(),
-            epsilon=eps, loss=loss, q_abs_max=q_abs_max, buffer_size=learner.buffer.size,
+            epsilon=eps, loss=loss, q_abs_max=q_abs_max, buffer_size=learning.stored(learner),
             table_misses=result.table_misses.sum() + tested.table_misses.sum())
         return learner, metrics
 
@@ -134,7 +129,7 @@ class Cycle:
     A slot is a (setting, seed) pair, setting-major: `settings` are configs that differ from
     `setup.config` only in their numeric hyperparameters (config.LEAF_FIELDS; default: that config
     alone), and each passes its values to its seeds' slots as leaves (learn/hyper.py), so one program
-    serves them all. Learners and metrics carry the placed slot axis of `seeds` (padded to a multiple of
+    serves them all. Anys and metrics carry the placed slot axis of `seeds` (padded to a multiple of
     the device count and sharded over the devices: `seeds.place(...)`, `seeds.unpad(...)`). Each device
     runs the per-seed cycle on its slots one after another (learn/devices.py), so the numbers depend
     neither on the device count nor on the other settings."""
@@ -162,7 +157,7 @@ class Cycle:
         self._tables_only = self._compile(False)
         self._with_host = None  # compiled on the first cycle that meets a state missing from a table
 
-    def run(self, learners: Learner, host_planner: bool) -> tuple[Learner, CycleMetrics]:
+    def run(self, learners: Any, host_planner: bool) -> tuple[Any, CycleMetrics]:
         """One cycle by one of the two programs (traceable): without the host planner, exact only where
         the metrics report no table miss; or with it."""
         if host_planner and self._with_host is None:
@@ -170,7 +165,7 @@ class Cycle:
         program = self._with_host if host_planner else self._tables_only
         return program(self._real, learners, *self._inputs)
 
-    def __call__(self, learners: Learner) -> tuple[Learner, CycleMetrics]:
+    def __call__(self, learners: Any) -> tuple[Any, CycleMetrics]:
         updated, metrics = self.run(learners, host_planner=False)
         if not np.asarray(self.seeds.unpad(metrics.table_misses)).any():
             return updated, metrics
@@ -183,7 +178,7 @@ class Cycle:
 class TrainOutput:
     """What `make_train`'s function returns: every seed's final learner and every cycle's metrics."""
 
-    learners: Learner  # leading axis: seeds
+    learners: Any  # leading axis: seeds
     metrics: CycleMetrics  # each field [seeds, cycles]
 
 
@@ -207,7 +202,7 @@ def make_train(setup: Setup) -> Callable[..., TrainOutput]:
         raise ValueError(f"{config.approach}: the low-level baselines train with brax's own loop, not make_train")
     seed_cycle = make_seed_cycle(setup, host_planner=False)
     tasks = _by_seed((setup.train.arrays, setup.test.arrays), config.num_seeds)
-    init = jax.vmap(partial(init_learner, setup.dqn))
+    init = jax.vmap(setup.learner.init)
 
     def one_seed(args):
         learner, train_tasks, test_tasks, hyper = args

@@ -20,10 +20,13 @@ def _divide(tensor: jax.Array, scalar: jax.Array) -> jax.Array:
     return tensor / divisor
 
 
-def clipped_adam(max_norm: float, learning_rate: float) -> optax.GradientTransformation:
-    reference = optax.chain(optax.clip_by_global_norm(max_norm), optax.adam(learning_rate))
+def clipped_adam(max_norm: float | None = None, learning_rate: float | None = None
+                 ) -> optax.GradientTransformationExtraArgs:
+    """Clip, then Adam. Built once: `max_norm` and `learning_rate` left None are given to each `update` as
+    keyword arguments (the cycle's hyperparameter leaves), so one transformation serves every setting."""
+    reference = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(1.0))  # the state's layout only
 
-    def update(grads, state, params=None):
+    def update(grads, state, params=None, *, max_norm=max_norm, learning_rate=learning_rate):
         del params
         clip_state, (adam, scale_state) = state
         # Clip: rescale the whole gradient to norm max_norm when it is longer.
@@ -41,4 +44,4 @@ def clipped_adam(max_norm: float, learning_rate: float) -> optax.GradientTransfo
         step = jax.tree.map(lambda m, v: (-1 * learning_rate) * (m / (jnp.sqrt(v + 0.0) + EPS)), mu_hat, nu_hat)
         return step, (clip_state, (adam._replace(count=count, mu=mu, nu=nu), scale_state))
 
-    return optax.GradientTransformation(reference.init, update)
+    return optax.GradientTransformationExtraArgs(reference.init, update)

@@ -106,9 +106,11 @@ ACTIVATIONS = {"leaky_relu": lambda x: nn.leaky_relu(x, LEAKY_SLOPE), "relu": nn
 OUTPUT_SCALES = {"zero": 0.0, "uniform": 1.0}  # TrainConfig.output_init -> the output layer's init bound
 
 
-def _mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int], activation: str, output_init: str) -> jax.Array:
+def _mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int], activation: str, output_init: str,
+         layer_norm: bool = False) -> jax.Array:
     for size in hidden_sizes:
-        x = ACTIVATIONS[activation](UniformDense(size)(x))
+        x = UniformDense(size)(x)
+        x = ACTIVATIONS[activation](nn.LayerNorm()(x) if layer_norm else x)
     return UniformDense(1, scale=OUTPUT_SCALES[output_init])(x)[..., 0]
 
 
@@ -116,10 +118,11 @@ class _Member(nn.Module):
     hidden_sizes: Sequence[int]
     activation: str
     output_init: str
+    layer_norm: bool
 
     @nn.compact
     def __call__(self, carry: None, x: jax.Array | SplitInput) -> tuple[None, jax.Array]:
-        return carry, _mlp(x, self.hidden_sizes, self.activation, self.output_init)
+        return carry, _mlp(x, self.hidden_sizes, self.activation, self.output_init, self.layer_norm)
 
 
 def scaled_input(x: jax.Array | SplitInput, shift: jax.Array, scale: jax.Array) -> jax.Array | SplitInput:
@@ -153,6 +156,7 @@ class QNetwork(nn.Module):
     # The authors' min-max scaling: the "norm" collection holds x_shift, x_scale [input] and y_shift,
     # y_scale (learn/dqn.py fits them every cycle; they are not trained).
     normalise: bool = False
+    layer_norm: bool = False  # a LayerNorm before each hidden activation (PQN's network: learn/pqn.py)
 
     @nn.compact
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
@@ -164,17 +168,18 @@ class QNetwork(nn.Module):
                 ("x_shift", jnp.zeros, (width,)), ("x_scale", jnp.ones, (width,)),
                 ("y_shift", jnp.zeros, ()), ("y_scale", jnp.ones, ()))}
             x = scaled_input(x, norm["x_shift"], norm["x_scale"])
-            q = QNetwork(self.hidden_sizes, self.ensemble, self.activation, self.output_init, name="net")(x, members)
+            q = QNetwork(self.hidden_sizes, self.ensemble, self.activation, self.output_init,
+                         layer_norm=self.layer_norm, name="net")(x, members)
             return q * norm["y_scale"] + norm["y_shift"]
         if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
-            q = _mlp(x, self.hidden_sizes, self.activation, self.output_init)[None]
+            q = _mlp(x, self.hidden_sizes, self.activation, self.output_init, self.layer_norm)[None]
         else:
             # Members one after another (a scan over their stacked parameters), not vmapped: a member
             # axis inside the per-seed program made XLA compile the gradient differently with the
             # number of devices (docs/RELIABILITY.md); each member alone compiles as the plain network.
             members_scan = nn.scan(_Member, variable_axes={"params": 0}, split_rngs={"params": True},
                                    in_axes=nn.broadcast, length=self.ensemble)
-            _, q = members_scan(self.hidden_sizes, self.activation, self.output_init)(None, x)
+            _, q = members_scan(self.hidden_sizes, self.activation, self.output_init, self.layer_norm)(None, x)
         return q if members else jnp.min(q, axis=0)
 
 

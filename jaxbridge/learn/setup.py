@@ -1,11 +1,13 @@
 """A run's config with everything it names resolved once (`Setup`): the env class, the training and test
-envs, the approach, the Q-network and the optimiser, and (built on first use) the seeds' task batches."""
+envs, the approach, the learner (its Q-network and optimiser), and (built on first use) the seeds' task
+batches."""
 from __future__ import annotations
 
 import dataclasses
 import threading
 from dataclasses import dataclass
-from functools import cached_property, lru_cache, partial
+from functools import cached_property, lru_cache
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -16,8 +18,8 @@ from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.episode import Controls
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch
 from jaxbridge.learn.approaches import Approach, get_approach
-from jaxbridge.learn.dqn import DQN, Learner, init_learner, make_dqn
-from jaxbridge.learn.q_bridge import task_state_split
+from jaxbridge.learn.learner import QLearner
+from jaxbridge.learn.learners import learner_factory
 from jaxbridge.utils.progress import SlowWork
 
 
@@ -30,7 +32,7 @@ class Setup:
     approach: Approach
     train_env: NoveltyEnv  # sized to the seeds' training tasks (the learners' shapes follow it), with the config's quirks
     test_env: NoveltyEnv  # sized to the seeds' test tasks, with the config's quirks
-    dqn: DQN  # network, optimiser and observation width, on the training env
+    learner: QLearner  # network, optimiser and observation width, on the training env (learn/learner.py)
 
     @cached_property
     def train(self) -> TaskBatch:
@@ -50,13 +52,13 @@ class Setup:
     def bridge(self, env: NoveltyEnv) -> Bridge:
         """The approach's bridge on `env` (equal arguments give equal bridges: one compilation)."""
         config = self.config
-        return self.approach.make_bridge(env, self.dqn.net, config.n_sample, config.explore_ground_operators,
+        return self.approach.make_bridge(env, self.learner.net, config.n_sample, config.explore_ground_operators,
                                          config.param_samples is ParamSamples.STRATIFIED)
 
-    def init_learners(self) -> Learner:
-        """One learner per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""
+    def init_learners(self) -> Any:
+        """One learner state per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""
         keys = jnp.stack([jax.random.key(s) for s in self.config.seeds])
-        return jax.vmap(partial(init_learner, self.dqn))(keys)
+        return jax.vmap(self.learner.init)(keys)
 
 
 def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> Setup:
@@ -66,9 +68,9 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds]).with_quirks(config.env_quirks)
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
-    split = task_state_split(train_env) if approach.controls.full_state and config.split_task_state else None
-    dqn = make_dqn(config, train_env, approach.observation_size(train_env), split)
-    return Setup(config, env_cls, approach, train_env, test_env, dqn)
+    make_learner = learner_factory(config.learner)
+    learner = make_learner(config, train_env, approach.observation_size(train_env), approach.controls.full_state)
+    return Setup(config, env_cls, approach, train_env, test_env, learner)
 
 
 _TASKS_LOCK = threading.Lock()

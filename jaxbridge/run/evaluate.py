@@ -118,7 +118,7 @@ class TrainedPolicy:
             bridge, controls = policy_bridge(batch.env, self.approach)
             return bridge, jax.tree.map(lambda x: x[owner], self.learners), controls
         bridge = self.setup.bridge(batch.env)
-        greedy = episode_params(self.learners, owner, np.zeros(len(owner), np.float32))
+        greedy = episode_params(self.setup, self.learners, owner, np.zeros(len(owner), np.float32))
         return bridge, greedy, self.setup.controls
 
     def run(self, batch: TaskBatch, seed: int = 0) -> EpisodeResult:

@@ -1,0 +1,97 @@
+"""A learner of your own, written against the learner contract only (docs/NEW_LEARNER.md): Monte Carlo Q.
+
+Each cycle it fits the bridge's Q-network to the discounted returns of that cycle's decisions (no
+bootstrapping, no replay buffer, no target network) by `EPOCHS` full-batch Adam steps. Simple, and weaker
+than double DQN: a return is one episode's luck. Train it with
+
+    python train.py --env light_switch_door --approaches ours --learner examples.monte_carlo_q:make_learner
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import optax
+from flax import struct
+
+from envs_jax import NoveltyEnv
+from jaxbridge import TrainConfig
+from jaxbridge.learn.q_bridge import QNetwork, encode, input_size
+from jaxbridge.learn.transitions import Transition
+
+EPOCHS = 50  # full-batch steps per cycle
+
+
+@struct.dataclass
+class MonteCarloState:
+    params: Any
+    opt_state: Any
+    key: jax.Array  # the cycle splits and replaces it
+    decisions: jax.Array  # the cycle counts the training decisions here
+    inputs: jax.Array  # the cycle's decisions as network inputs, [episodes * steps, input]
+    returns: jax.Array  # their discounted returns
+    valid: jax.Array  # which rows are decisions
+
+
+def discounted_returns(transitions: Transition, valid: jax.Array, gamma: jax.Array) -> jax.Array:
+    """Backwards through one episode's rows: a decision's return is its reward plus gamma times the next
+    decision's return, unless it was done."""
+    def backwards(later, row):
+        reward, done, decided = row
+        g = reward + jnp.where(done, 0.0, gamma * later)
+        return jnp.where(decided, g, later), g
+    return jax.lax.scan(backwards, jnp.float32(0.0), (transitions.reward, transitions.done, valid), reverse=True)[1]
+
+
+@dataclass(frozen=True)
+class MonteCarloQ:
+    env: NoveltyEnv
+    net: QNetwork
+    num_features: int
+    rows: int  # episodes_per_cycle x train_steps: the rows a cycle hands `observe`
+    learning_rate: float
+    shares_network: bool = True
+
+    def init(self, key: jax.Array) -> MonteCarloState:
+        k_init, k_run = jax.random.split(key)
+        width = input_size(self.env, self.num_features)
+        params = self.net.init(k_init, jnp.zeros((1, width), jnp.float32))
+        return MonteCarloState(params=params, opt_state=optax.adam(self.learning_rate).init(params), key=k_run,
+                               decisions=jnp.int32(0), inputs=jnp.zeros((self.rows, width), jnp.float32),
+                               returns=jnp.zeros(self.rows, jnp.float32), valid=jnp.zeros(self.rows, bool))
+
+    def greedy(self, state: MonteCarloState) -> Any:
+        return state.params
+
+    def observe(self, hyper, state: MonteCarloState, transitions: Transition, valid: jax.Array) -> MonteCarloState:
+        returns = jax.vmap(discounted_returns, in_axes=(0, 0, None))(transitions, valid, hyper.gamma)
+        inputs = encode(self.env, transitions.features, transitions.skill, transitions.param)
+        return state.replace(inputs=inputs.reshape(self.rows, -1), returns=returns.reshape(-1), valid=valid.reshape(-1))
+
+    def learn(self, hyper, state: MonteCarloState, decisions: jax.Array, tasks: Any):
+        optimizer, weight = optax.adam(self.learning_rate), state.valid.astype(jnp.float32)
+
+        def loss_fn(params):
+            q = self.net.apply(params, state.inputs)
+            return jnp.sum(weight * (q - state.returns) ** 2) / jnp.maximum(weight.sum(), 1.0), jnp.max(jnp.abs(q) * weight)
+
+        def step(carry, _):
+            params, opt_state = carry
+            (loss, q_abs), grads = jax.value_and_grad(loss_fn, has_aux=True)(params)
+            updates, opt_state = optimizer.update(grads, opt_state)
+            return (optax.apply_updates(params, updates), opt_state), (loss, q_abs)
+
+        (params, opt_state), (losses, q_abs) = jax.lax.scan(step, (state.params, state.opt_state), None, length=EPOCHS)
+        return state.replace(params=params, opt_state=opt_state), losses.mean(), q_abs.max()
+
+    def stored(self, state: MonteCarloState) -> jax.Array:
+        return state.valid.sum(dtype=jnp.int32)
+
+
+def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> MonteCarloQ:
+    """The factory `--learner examples.monte_carlo_q:make_learner` names: the config's network widths and
+    learning rate, for the approach's observation (`full_state` needs nothing different here)."""
+    return MonteCarloQ(env, QNetwork(config.hidden_sizes), num_features,
+                       config.episodes_per_cycle * config.train_steps, config.learning_rate)

@@ -1,0 +1,33 @@
+"""Learners that break the contract, each in one way, for the refusal tests (the example learner of
+docs/NEW_LEARNER.md is examples/monte_carlo_q.py)."""
+from dataclasses import dataclass
+
+import jax.numpy as jnp
+
+from examples.monte_carlo_q import MonteCarloQ, make_learner
+
+
+@dataclass(frozen=True)
+class GrowingState(MonteCarloQ):
+    """observe keeps only the decisions, so the state's shape would change from cycle to cycle."""
+
+    def observe(self, hyper, state, transitions, valid):
+        state = super().observe(hyper, state, transitions, valid)
+        return state.replace(returns=state.returns[:-1])
+
+
+@dataclass(frozen=True)
+class VectorLoss(MonteCarloQ):
+    """learn returns the loss of every epoch instead of their mean."""
+
+    def learn(self, hyper, state, decisions, tasks):
+        state, loss, q_abs = super().learn(hyper, state, decisions, tasks)
+        return state, jnp.full(3, loss), q_abs
+
+
+def growing_state(*args):
+    return GrowingState(*vars(make_learner(*args)).values())
+
+
+def vector_loss(*args):
+    return VectorLoss(*vars(make_learner(*args)).values())
