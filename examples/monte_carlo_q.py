@@ -1,8 +1,8 @@
 """A learner of your own, written against the learner contract only (docs/NEW_LEARNER.md): Monte Carlo Q.
 
-Each cycle it fits the bridge's Q-network to the discounted returns of that cycle's decisions (no
-bootstrapping, no replay buffer, no target network) by `EPOCHS` full-batch Adam steps. Simple, and weaker
-than double DQN: a return is one episode's luck. Train it with
+Each cycle it fits the bridge's Q-network to the discounted returns of the decisions of its last `MEMORY`
+cycles (no bootstrapping, no target network) by `EPOCHS` full-batch Adam steps. Simple, and weaker than
+double DQN: a return is one episode's luck. Train it with
 
     python train.py --env light_switch_door --approaches ours --learner examples.monte_carlo_q:make_learner
 """
@@ -22,6 +22,7 @@ from jaxbridge.learn.q_bridge import QNetwork, encode, input_size
 from jaxbridge.learn.transitions import Transition
 
 EPOCHS = 50  # full-batch steps per cycle
+MEMORY = 20  # cycles of decisions kept
 
 
 @struct.dataclass
@@ -30,7 +31,8 @@ class MonteCarloState:
     opt_state: Any
     key: jax.Array  # the cycle splits and replaces it
     decisions: jax.Array  # the cycle counts the training decisions here
-    inputs: jax.Array  # the cycle's decisions as network inputs, [episodes * steps, input]
+    cycles: jax.Array  # cycles observed: the oldest cycle's rows are overwritten next
+    inputs: jax.Array  # the last MEMORY cycles' rows as network inputs, [MEMORY * episodes * steps, input]
     returns: jax.Array  # their discounted returns
     valid: jax.Array  # which rows are decisions
 
@@ -58,9 +60,10 @@ class MonteCarloQ:
         k_init, k_run = jax.random.split(key)
         width = input_size(self.env, self.num_features)
         params = self.net.init(k_init, jnp.zeros((1, width), jnp.float32))
+        rows = MEMORY * self.rows
         return MonteCarloState(params=params, opt_state=optax.adam(self.learning_rate).init(params), key=k_run,
-                               decisions=jnp.int32(0), inputs=jnp.zeros((self.rows, width), jnp.float32),
-                               returns=jnp.zeros(self.rows, jnp.float32), valid=jnp.zeros(self.rows, bool))
+                               decisions=jnp.int32(0), cycles=jnp.int32(0), inputs=jnp.zeros((rows, width), jnp.float32),
+                               returns=jnp.zeros(rows, jnp.float32), valid=jnp.zeros(rows, bool))
 
     def greedy(self, state: MonteCarloState) -> Any:
         return state.params
@@ -68,7 +71,11 @@ class MonteCarloQ:
     def observe(self, hyper, state: MonteCarloState, transitions: Transition, valid: jax.Array) -> MonteCarloState:
         returns = jax.vmap(discounted_returns, in_axes=(0, 0, None))(transitions, valid, hyper.gamma)
         inputs = encode(self.env, transitions.features, transitions.skill, transitions.param)
-        return state.replace(inputs=inputs.reshape(self.rows, -1), returns=returns.reshape(-1), valid=valid.reshape(-1))
+        at = (state.cycles % MEMORY) * self.rows
+        put = lambda memory, new: jax.lax.dynamic_update_slice_in_dim(
+            memory, new.reshape((self.rows,) + memory.shape[1:]), at, 0)
+        return state.replace(inputs=put(state.inputs, inputs), returns=put(state.returns, returns),
+                             valid=put(state.valid, valid), cycles=state.cycles + 1)
 
     def learn(self, hyper, state: MonteCarloState, decisions: jax.Array, tasks: Any):
         optimizer, weight = optax.adam(self.learning_rate), state.valid.astype(jnp.float32)

@@ -1,6 +1,8 @@
 """`train.py --preset`: a named set of training values, resolved once into the run's TrainConfig.
 
 * `jaxbridge` (the default, what we recommend): TrainConfig's defaults and the env's `train_defaults`.
+* `pqn`: `jaxbridge`'s values with the PQN learner and its values tuned on tuning seeds 0-7 of Light Switch
+  Door (docs/RESULTS.md, "Learners").
 * `authors`: what the authors' code did (reference/method.md §5, §7) where ours differs, per env: the
   values below, then the env's `authors_defaults` (its n_sample, its test tasks, its env quirks). Flags given on the
   command line still override a preset's values.
@@ -11,7 +13,8 @@ relabelling globals, epsilon's per-decision decay).
 from __future__ import annotations
 
 PRESETS = {"jaxbridge": "ours: the defaults we recommend (docs/DESIGN.md)",
-           "authors": "the authors' code where ours differs (reference/method.md), per env"}
+           "authors": "the authors' code where ours differs (reference/method.md), per env",
+           "pqn": "ours with the PQN learner and its tuned values (docs/RESULTS.md, Learners)"}
 DEFAULT_PRESET = "jaxbridge"
 
 # The authors' values for every env (reference/method.md §4.5, §5, §7).
@@ -36,6 +39,15 @@ AUTHORS = {
     "param_samples": "iid",  # independent parameter samples in the argmax
 }
 
+# PQN's values (learn/pqn.py), chosen on Light Switch Door's tuning seeds 0-7 (bench/learners.py says how).
+PQN = {
+    "learner": "pqn",
+    "learning_rate": 1e-4,  # smaller steps: without a buffer each cycle refits on its own decisions
+    "q_lambda": 0.3,
+    "pqn_epochs": 256,
+    "pqn_minibatches": 4,
+}
+
 
 def preset_values(preset: str, env_cls) -> dict:
     """The TrainConfig values `preset` sets for `env_cls` (before command-line flags); ValueError for an
@@ -45,6 +57,8 @@ def preset_values(preset: str, env_cls) -> dict:
     values = {"preset": preset, **env_cls.train_defaults}
     if preset == "authors":
         values.update(AUTHORS, **env_cls.authors_defaults)
+    if preset == "pqn":
+        values.update(PQN)
     return values
 
 

@@ -86,14 +86,17 @@ def _calls(where: str, fn, *args) -> Any:
         raise LearnerContractError(f"{where}: raised {type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}") from err
 
 
-def example_transitions(learner: QLearner, episodes: int, steps: int) -> tuple[Transition, jax.Array]:
-    """Transitions of the shapes a cycle hands `observe`: [episodes, steps], every other row a decision."""
+def example_transitions(learner: QLearner, config: TrainConfig) -> tuple[Transition, jax.Array]:
+    """Transitions of the shapes a cycle of `config` hands `observe`: [episodes_per_cycle, train_steps], every
+    other row a decision, with their step counts where a step discount is on."""
+    episodes, steps = config.episodes_per_cycle, config.train_steps
     env, width = learner.env, learner.num_features
     features = jnp.zeros((episodes, steps, width), jnp.float32)
     shape = (episodes, steps)
     transitions = Transition(features=features, skill=jnp.zeros(shape, jnp.int32), param=jnp.zeros(shape, jnp.float32),
                              reward=jnp.zeros(shape, jnp.float32), done=jnp.ones(shape, bool), next_features=features,
-                             next_num_ground=jnp.ones(shape + (env.num_skills + 1,), jnp.int32))
+                             next_num_ground=jnp.ones(shape + (env.num_skills + 1,), jnp.int32),
+                             steps=jnp.ones(shape, jnp.int32) if config.counts_steps else None)
     return transitions, jnp.asarray(np.arange(steps)[None, :] % 2 == 0).repeat(episodes, 0)
 
 
@@ -118,7 +121,7 @@ def check_learner(learner: QLearner, config: TrainConfig, tasks: Any = None) -> 
     candidates = jnp.zeros((4, input_size(learner.env, learner.num_features)), jnp.float32)
     q = _calls(f"{name}.greedy", lambda s: learner.net.apply(learner.greedy(s), candidates), state)
     _expect(q.shape == (4,), f"{name}.greedy", "variables for net.apply giving one Q per input row", _shapes(q))
-    transitions, valid = example_transitions(learner, config.episodes_per_cycle, config.train_steps)
+    transitions, valid = example_transitions(learner, config)
     observed = _calls(f"{name}.observe", learner.observe, hyper, state, transitions, valid)
     _expect(_shapes(observed) == _shapes(state), f"{name}.observe", "a state of init's shapes and dtypes",
             "another (a state's shapes must not change: the cycle is a scan)")

@@ -55,7 +55,8 @@ class PQN:
         features = jnp.zeros(shape + (self.num_features,), jnp.float32)
         batch = Transition(features=features, skill=jnp.zeros(shape, jnp.int32), param=jnp.zeros(shape, jnp.float32),
                            reward=jnp.zeros(shape, jnp.float32), done=jnp.ones(shape, bool), next_features=features,
-                           next_num_ground=jnp.zeros(shape + (self.env.num_skills + 1,), jnp.int32))
+                           next_num_ground=jnp.zeros(shape + (self.env.num_skills + 1,), jnp.int32),
+                           steps=jnp.zeros(shape, jnp.int32) if self.config.counts_steps else None)
         return PQNState(params=params, opt_state=self.optimizer.init(params), key=k_run, decisions=jnp.int32(0),
                         updates=jnp.int32(0), batch=batch, valid=jnp.zeros(shape, bool))
 
@@ -63,7 +64,7 @@ class PQN:
         return state.params
 
     def observe(self, hyper: Hyper, state: PQNState, transitions: Transition, valid: jax.Array) -> PQNState:
-        return state.replace(batch=transitions.replace(task=None, steps=None), valid=valid)
+        return state.replace(batch=transitions.replace(task=None), valid=valid)
 
     def stored(self, state: PQNState) -> jax.Array:
         return state.valid.sum(dtype=jnp.int32)
@@ -72,7 +73,8 @@ class PQN:
                        key: jax.Array) -> jax.Array:
         """float32[episodes, steps]: each decision's Q(lambda) return, backwards through its episode's
         decisions: r + gamma ((1 - lambda) max_a Q(s', a) + lambda G'), G' the next decision's return;
-        nothing past `done`. The max is over the next state's applicable candidates (n_target_sample
+        nothing past `done`; with a step discount, reward and future both step_gamma^steps later (as
+        double DQN's targets). The max is over the next state's applicable candidates (n_target_sample
         parameter samples per skill), by the current network."""
         config, env = self.config, self.env
         skills = candidate_skills(env, config.n_target_sample)
@@ -84,23 +86,30 @@ class PQN:
         if config.clip_bootstrap:
             next_q = jnp.clip(next_q, 0.0, 1.0 + hyper.call_planner_bonus)
 
+        late = (jnp.ones_like(batch.reward) if batch.steps is None
+                else config.step_gamma ** batch.steps.astype(jnp.float32))
+
         def backwards(later, row):
-            reward, done, q, decided = row
-            g = reward + jnp.where(done, 0.0, hyper.gamma * ((1.0 - hyper.q_lambda) * q + hyper.q_lambda * later))
+            reward, done, q, decided, discount = row
+            future = hyper.gamma * discount * ((1.0 - hyper.q_lambda) * q + hyper.q_lambda * later)
+            g = reward * discount + jnp.where(done, 0.0, future)
             return jnp.where(decided, g, later), g
 
         def episode(rows):
             _, returns = jax.lax.scan(backwards, jnp.float32(0.0), rows, reverse=True)
             return returns
-        return jax.vmap(episode)((batch.reward, batch.done, next_q, valid))
+        return jax.vmap(episode)((batch.reward, batch.done, next_q, valid, late))
 
     def minibatch_step(self, hyper: Hyper, state: PQNState, batch: Transition, targets: jax.Array,
-                       weight: jax.Array) -> tuple[PQNState, tuple[jax.Array, jax.Array]]:
+                       weight: jax.Array) -> tuple[PQNState, tuple[jax.Array, jax.Array, jax.Array]]:
         """One Adam step on the weighted squared error of a minibatch; none where it holds no decision."""
-        env, net = self.env, self.net
+        env, net, noise = self.env, self.net, self.config.feature_noise
+        features = batch.features
+        if noise > 0:  # as double DQN's (TrainConfig.feature_noise): a fresh draw per update
+            features = features + noise * jax.random.normal(jax.random.fold_in(state.key, state.updates), features.shape)
 
         def loss_fn(params):
-            q = net.apply(params, batch_input(env, batch.features, batch.skill, batch.param), members=True)
+            q = net.apply(params, batch_input(env, features, batch.skill, batch.param), members=True)
             loss = jnp.sum(weight * (q - targets) ** 2) / jnp.maximum(weight.sum(), 1.0) / q.shape[0]
             return loss, jnp.max(jnp.where(weight > 0, jnp.abs(q), 0.0))
 
@@ -144,8 +153,7 @@ class PQN:
         return state.replace(key=key), loss, jnp.max(q_abs * ran)
 
 
-UNSUPPORTED = {"normalise": lambda c: c.normalise is not Normalise.NONE, "step_gamma": lambda c: c.counts_steps,
-               "fit_patience": lambda c: c.fit_patience > 0, "feature_noise": lambda c: c.feature_noise > 0}
+UNSUPPORTED = {"normalise": lambda c: c.normalise is not Normalise.NONE, "fit_patience": lambda c: c.fit_patience > 0}
 
 
 def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> PQN:

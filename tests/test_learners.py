@@ -1,0 +1,118 @@
+"""The learner contract (jaxbridge/learn/learner.py): both built-in learners pass `check_learner`, broken ones are
+refused naming the method, PQN's Q(lambda) targets are the formula's, PQN resumes exactly and evaluates, and the
+example learner of docs/NEW_LEARNER.md trains from the command line."""
+import csv
+import json
+import subprocess
+import sys
+from dataclasses import replace
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from run_helpers import ROOT, one_line_error, train as train_cli
+
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.learn.hyper import Hyper
+from jaxbridge.learn.learner import LearnerContractError, check_learner
+from jaxbridge.learn.setup import make_setup
+from jaxbridge.learn.transitions import Transition
+from jaxbridge.run import rundir
+from jaxbridge.run.evaluate import evaluate_run
+from jaxbridge.run.runner import train
+
+
+def one_seed_tasks(setup):
+    return jax.tree.map(lambda x: x[:setup.config.episodes_per_cycle], setup.train.arrays.tasks)
+
+
+@pytest.mark.parametrize("env", ["light_switch_door", "coffee"])
+@pytest.mark.parametrize("learner", ["dqn", "pqn"])
+def test_both_learners_keep_the_contract_on_features_and_on_the_full_state(env, learner):
+    for approach in ("ours", "maple_q"):  # the object-centric features; the full state (DQN: split off)
+        config = TrainConfig.for_env(env, approach=approach, learner=learner, num_seeds=1)
+        setup = make_setup(config)
+        assert check_learner(setup.learner, config, one_seed_tasks(setup)) is setup.learner
+
+
+def test_a_broken_learner_is_refused_naming_the_method_and_what_it_expected(tmp_path):
+    config = TrainConfig()
+    for spec, message in (("tests.plugin_learners:growing_state", "GrowingState.observe: expected a state of init's shapes"),
+                          ("tests.plugin_learners:vector_loss", "VectorLoss.learn: expected loss a float32 scalar")):
+        learner = make_setup(replace(config, learner=spec)).learner
+        with pytest.raises(LearnerContractError, match=message.replace("(", r"\(")):
+            check_learner(learner, config)
+        proc = train_cli("--learner", spec, "--approaches", "ours", "--num-seeds", "1", "--out", str(tmp_path))
+        one_line_error(proc, 2, "--learner:", message)
+    with pytest.raises(LearnerContractError, match="object: expected an attribute 'env'"):
+        check_learner(object(), config)
+    one_line_error(train_cli("--learner", "nope", "--out", str(tmp_path)), 2, "unknown learner 'nope'", "dqn, pqn")
+    assert not any(tmp_path.iterdir())  # refused before anything was written
+
+
+@pytest.mark.parametrize("q_lambda", [0.0, 0.5, 1.0])
+def test_pqn_targets_are_q_lambda_returns_backwards_through_the_decisions(q_lambda):
+    config = TrainConfig(learner="pqn", num_seeds=1, gamma=0.8, q_lambda=q_lambda, episodes_per_cycle=1, train_steps=5)
+    pqn = make_setup(config).learner
+    params = pqn.init(jax.random.key(0)).params
+    c = 0.25  # the network's value everywhere: a zero output kernel and this bias
+    params = jax.tree_util.tree_map_with_path(
+        lambda path, x: jnp.full_like(x, c) if "bias" in str(path[-1]) and x.shape == (1,) else
+        (jnp.zeros_like(x) if x.shape[-1:] == (1,) else x), params)
+    # decisions at rows 0, 2 and 3 of one episode; the last reaches the goal (reward 1, done)
+    valid = jnp.array([[True, False, True, True, False]])
+    features = jnp.zeros((1, 5, pqn.num_features))
+    batch = Transition(features=features, skill=jnp.zeros((1, 5), jnp.int32), param=jnp.zeros((1, 5)),
+                       reward=jnp.array([[0.0, 0.0, 0.0, 1.0, 0.0]]), done=jnp.array([[False, False, False, True, True]]),
+                       next_features=features, next_num_ground=jnp.ones((1, 5, pqn.env.num_skills + 1), jnp.int32))
+    returns = np.asarray(pqn.lambda_returns(Hyper.of(config), params, batch, valid, jax.random.key(1)))[0]
+    g3 = 1.0
+    g2 = 0.8 * ((1 - q_lambda) * c + q_lambda * g3)
+    g0 = 0.8 * ((1 - q_lambda) * c + q_lambda * g2)
+    np.testing.assert_allclose(returns[[0, 2, 3]], [g0, g2, g3], rtol=1e-6)
+
+
+class Crash(Exception):
+    pass
+
+
+def test_a_pqn_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test_rate(tmp_path):
+    config = TrainConfig.for_env("light_switch_door", "pqn", num_seeds=2, cycles=3, episodes_per_cycle=2,
+                                 pqn_epochs=4, checkpoint_every=1, num_test_tasks=2)
+    setup = make_setup(config)
+    for name in ("whole", "crashed"):
+        rundir.prepare(tmp_path / name, overwrite=False)
+    train(setup, tmp_path / "whole", progress=False)
+
+    def crash_before_cycle_3(cycle, learners):
+        if cycle == 3:
+            raise Crash
+        return learners
+
+    with pytest.raises(Crash):
+        train(setup, tmp_path / "crashed", progress=False, fault_injection=crash_before_cycle_3)
+    train(setup, tmp_path / "crashed", progress=False, resume=True)
+    whole = (tmp_path / "whole" / "metrics.csv").read_bytes()
+    assert (tmp_path / "crashed" / "metrics.csv").read_bytes() == whole and whole.count(b"\n") == 7
+    rows = list(csv.DictReader((tmp_path / "whole" / "metrics.csv").open()))
+    assert all(float(r["loss"]) > 0 for r in rows) and all(int(r["buffer_size"]) == int(r["train_decisions"]) for r in rows)
+    assert json.loads((tmp_path / "crashed" / "config.json").read_text())["learner"] == "pqn"
+    _, step, _, result, _ = evaluate_run(tmp_path / "crashed")
+    last = [float(r["test_solve_rate"]) for r in rows if r["cycle"] == "3"]
+    assert step == 3 and np.mean(result.success) == pytest.approx(np.mean(last))
+
+
+def test_the_example_learner_trains_from_the_command_line_and_beats_the_random_bridge(tmp_path):
+    learner = "examples.monte_carlo_q:make_learner"
+    proc = train_cli("--env", "examples.locked_box:LockedBox", "--approaches", "ours,random", "--learner", learner,
+                     "--num-seeds", "2", "--cycles", "3", "--no-progress", "--out", str(tmp_path))
+    assert proc.returncode == 0, proc.stderr
+    run = tmp_path / "locked_box"
+    assert json.loads((run / "ours" / "config.json").read_text())["learner"] == learner  # what --resume and eval.py load
+    last = {a: [float(r["test_solve_rate"]) for r in csv.DictReader((run / a / "metrics.csv").open()) if r["cycle"] == "3"]
+            for a in ("ours", "random")}
+    assert np.mean(last["ours"]) >= 0.8 > 0.3 >= np.mean(last["random"]), last
+    evaluated = subprocess.run([sys.executable, "eval.py", str(run / "ours")], cwd=ROOT, capture_output=True, text=True,
+                               timeout=300)
+    assert evaluated.returncode == 0, evaluated.stderr
