@@ -106,9 +106,10 @@ def table_header(last: int) -> list[str]:
             f"| cycle {last} minus the best before |", "|---|" + "---|" * (len(CYCLES) + 3)]
 
 
-def approach_row(name: str, cycles: dict[int, dict], last: int) -> str:
-    """An approach's test solve rate at CYCLES, smooth rewards and drop from its best, from results.csv rows."""
-    return (f"| **{label(name)}** | " + " | ".join(stat_cell(cycles[c], "test_solve_rate") if c in cycles else ""
+def approach_row(name: str, cycles: dict[int, dict], last: int, shown: str | None = None) -> str:
+    """An approach's test solve rate at CYCLES, smooth rewards and drop from its best, from results.csv rows;
+    `shown`: its label in the table (default: the approach's)."""
+    return (f"| **{shown or label(name)}** | " + " | ".join(stat_cell(cycles[c], "test_solve_rate") if c in cycles else ""
                                                  for c in CYCLES)
             + f" | {stat_cell(cycles[last], 'test_smooth_reward')} | {stat_cell(cycles[last], 'train_smooth_reward')} "
             f"| {drop_cell(cycles[last])} |")
@@ -226,8 +227,36 @@ def plan_repair(env: str) -> str:
     return "\n".join(lines)
 
 
+def cycles_to(cycles: dict[int, dict], level: float = 0.9) -> str:
+    """The first cycle whose mean test solve rate over seeds reaches `level`, from results.csv rows."""
+    return next((str(c) for c in sorted(cycles) if float(cycles[c]["test_solve_rate_mean"]) >= level), "not reached")
+
+
+def learners(env: str) -> str:
+    """RESULTS.md's table of ours with each learner on `env`'s test seeds (bench.learners' records): test
+    solve rates, cycles to a mean of 0.9, each run's seconds per cycle and peak memory."""
+    folder = RECORDS / env
+    run = read_json(folder / "learners.json")
+    if run is None:
+        return f"_Not generated yet: `python -m bench.learners --env {env}`._\n"
+    by_run, last = by_approach(read_csv(folder / "learners.csv"))
+    shown = {name: f"ours, {text}" for name, text in run["labels"].items()}
+    lines = [f"Test seeds {run['seeds']}, {last} cycles; each cell: mean [95% CI] over seeds, IQM [95% CI] beside it.",
+             "", *table_header(last)]
+    lines += [approach_row(name, cycles, last, shown[name]) for name, cycles in by_run.items()]
+    lines += ["", "| learner | cycles to a mean of 0.9 | seconds per cycle (the whole run's wall time / cycles) "
+              "| peak memory (MiB) |", "|---|---|---|---|"]
+    for name, cycles in by_run.items():
+        step = run["steps"][name]
+        lines.append(f"| {shown[name]} | {cycles_to(cycles)} | {step['wall_s'] / last:.2f} | {step['peak_rss_mib']:,.0f} |")
+    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit "
+              f"{run['commit'][:10]} (the two trainings one after another).", "", f"![{ENV_TITLES[env]}, learners](results/{env}/learners.png)"]
+    return "\n".join(lines)
+
+
 BLOCKS = {**{f"headline {env}": (lambda env=env: headline(env)) for env in ENVS},
           **{f"sweep {env}": (lambda env=env: sweep_table(env)) for env in ENVS},
-          **{f"plan repair {env}": (lambda env=env: plan_repair(env)) for env in ENVS + VARIANTS}}
+          **{f"plan repair {env}": (lambda env=env: plan_repair(env)) for env in ENVS + VARIANTS},
+          **{f"learners {env}": (lambda env=env: learners(env)) for env in ENVS}}
 
 
