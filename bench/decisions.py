@@ -12,7 +12,6 @@ import numpy as np
 
 from bench.sweep import print_digits, sweep_parser, swept_config, train_seeds
 from jaxbridge.core.meta_policy import rollout
-from jaxbridge.learn.online import episode_params
 from jaxbridge.learn.q_bridge import encode
 
 
@@ -20,7 +19,7 @@ def greedy_test_rollout(setup, learners, num_seeds: int, num_tests: int):
     """Every seed's greedy bridge on its test tasks, recorded: (EpisodeResult, StepRecord [T, episodes]);
     episode i is seed i // num_tests's task i % num_tests."""
     owner = np.repeat(np.arange(num_seeds), num_tests)
-    greedy = episode_params(setup, learners, owner, jnp.zeros(len(owner), jnp.float32))
+    greedy = setup.episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
     keys = jax.random.split(jax.random.key(123), len(owner))
     env = setup.test_env
     return rollout(env, setup.bridge(env), greedy, setup.test.arrays, keys, setup.test.max_steps, record=True,

@@ -44,13 +44,6 @@ class CycleMetrics:
     table_misses: jax.Array  # planner lookups answered by the host planner (train + test)
 
 
-def episode_params(setup: Setup, learners: Any, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:
-    """Bridge parameters for a batch of episodes: each episode gets its seed's greedy network (owner[i] is
-    the seed index of episode i; `learners` are the seeds' states) and exploration rate eps[i] (zeros for
-    the greedy bridge)."""
-    return QBridgeParams(q=jax.tree.map(lambda x: x[owner], jax.vmap(setup.learner.greedy)(learners)), epsilon=eps)
-
-
 def _repeat(params, n: int):
     """One seed's network for each of n episodes."""
     return jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), params)

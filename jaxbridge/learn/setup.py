@@ -11,6 +11,7 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.bridges import Bridge
@@ -20,6 +21,7 @@ from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, 
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.learner import QLearner
 from jaxbridge.learn.learners import learner_factory
+from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.utils.progress import SlowWork
 
 
@@ -56,9 +58,27 @@ class Setup:
                                          config.param_samples is ParamSamples.STRATIFIED)
 
     def init_learners(self) -> Any:
-        """One learner state per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s)."""
+        """One learner state per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s).
+        A low-level baseline's are brax's (normalizer, policy) parameters (learn/low_level.py)."""
+        if self.approach.low_level:
+            from jaxbridge.learn.low_level import init_policies  # brax: imported only when used
+            return init_policies(self)
         keys = jnp.stack([jax.random.key(s) for s in self.config.seeds])
         return jax.vmap(self.learner.init)(keys)
+
+    def greedy_policy(self, env: NoveltyEnv, states: Any, owner: np.ndarray) -> tuple[Bridge, Any, Controls]:
+        """The approach's greedy bridge on `env`, its per-episode parameters (episode i acts with seed owner[i]'s
+        of the seeds' learner `states`) and its controls: what a test rollout of a batch of `env` runs."""
+        if self.approach.low_level:
+            from jaxbridge.learn.low_level import policy_bridge
+            bridge, controls = policy_bridge(env, self.approach)
+            return bridge, jax.tree.map(lambda x: x[owner], states), controls
+        return self.bridge(env), self.episode_params(states, owner, np.zeros(len(owner), np.float32)), self.controls
+
+    def episode_params(self, states: Any, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:
+        """Q-bridge parameters for a batch of episodes: episode i acts with seed owner[i]'s greedy network (of
+        the seeds' learner `states`) and exploration rate eps[i] (zeros: greedy)."""
+        return QBridgeParams(q=jax.tree.map(lambda x: x[owner], jax.vmap(self.learner.greedy)(states)), epsilon=eps)
 
 
 def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> Setup:

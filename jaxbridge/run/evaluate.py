@@ -15,7 +15,6 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import Controls, EpisodeResult, rollout
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.learn.approaches import Approach
-from jaxbridge.learn.online import episode_params
 from jaxbridge.learn.setup import Setup
 from jaxbridge.run.memory import check_evaluation
 from jaxbridge.run.runner import load_learners
@@ -112,14 +111,7 @@ class TrainedPolicy:
         index = {seed: i for i, seed in enumerate(self.config.seeds)}
         if not set(batch.seeds.tolist()) <= index.keys():
             raise ValueError(f"the batch has tasks of seeds this run did not train ({self.config.seeds})")
-        owner = np.array([index[s] for s in batch.seeds.tolist()])
-        if self.approach.low_level:  # brax's (normalizer, policy) params per seed
-            from jaxbridge.learn.low_level import policy_bridge
-            bridge, controls = policy_bridge(batch.env, self.approach)
-            return bridge, jax.tree.map(lambda x: x[owner], self.learners), controls
-        bridge = self.setup.bridge(batch.env)
-        greedy = episode_params(self.setup, self.learners, owner, np.zeros(len(owner), np.float32))
-        return bridge, greedy, self.setup.controls
+        return self.setup.greedy_policy(batch.env, self.learners, np.array([index[s] for s in batch.seeds.tolist()]))
 
     def run(self, batch: TaskBatch, seed: int = 0) -> EpisodeResult:
         bridge, greedy, controls = self.on(batch)

@@ -148,10 +148,5 @@ def load_learners(run_dir: Path) -> tuple[Setup, object, int]:
     config = load_config(run_dir)
     check_checkpoint_belongs(config, run_dir)
     setup = make_setup(config)
-    if setup.approach.low_level:  # brax's policies, stacked over seeds (run/low_level_runs.py)
-        from jaxbridge.learn.low_level import init_policies
-        template = init_policies(setup)
-    else:
-        template = setup.init_learners()
-    learners, record, step = checkpoint.restore(run_dir / "checkpoints", template)
+    learners, record, step = checkpoint.restore(run_dir / "checkpoints", setup.init_learners())
     return setup, learners, step
