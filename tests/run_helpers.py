@@ -72,3 +72,31 @@ def read_scalars(directory: Path) -> dict[str, list[tuple[int, float]]]:
                 if value.HasField("simple_value"):
                     scalars.setdefault(value.tag, []).append((event.step, value.simple_value))
     return scalars
+
+
+class Crash(Exception):
+    """A fault injected into a training run."""
+
+
+def trained_whole_and_resumed(setup, directory: Path, crash_at: int) -> tuple[Path, Path]:
+    """`setup` trained in one go into directory/whole, and into directory/crashed with a crash before cycle
+    `crash_at`, then resumed from its checkpoints: the two run directories."""
+    import pytest
+
+    from jaxbridge.run import rundir
+    from jaxbridge.run.runner import train
+
+    whole, crashed = directory / "whole", directory / "crashed"
+    for run_dir in (whole, crashed):
+        rundir.prepare(run_dir, overwrite=False)
+    train(setup, whole, progress=False)
+
+    def crash(cycle, learners):
+        if cycle == crash_at:
+            raise Crash
+        return learners
+
+    with pytest.raises(Crash):
+        train(setup, crashed, progress=False, fault_injection=crash)
+    train(setup, crashed, progress=False, resume=True)
+    return whole, crashed

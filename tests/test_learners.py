@@ -9,16 +9,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from run_helpers import one_line_error, train as train_cli
+from run_helpers import one_line_error, train as train_cli, trained_whole_and_resumed
 
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.learner import LearnerContractError, check_learner
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.learn.transitions import Transition
-from jaxbridge.run import rundir
 from jaxbridge.run.evaluate import evaluate_run
-from jaxbridge.run.runner import train
 
 
 def one_seed_tasks(setup):
@@ -74,26 +72,10 @@ def test_pqn_targets_are_q_lambda_returns_backwards_through_the_decisions():
         np.testing.assert_allclose(got[[0, 2, 3]], [g0, g2, g3], rtol=1e-6)
 
 
-class Crash(Exception):
-    pass
-
-
 def test_a_pqn_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test_rate(tmp_path):
     config = TrainConfig.for_env("light_switch_door", "pqn", num_seeds=2, cycles=3, episodes_per_cycle=2,
                                  pqn_epochs=4, checkpoint_every=1, num_test_tasks=2)
-    setup = make_setup(config)
-    for name in ("whole", "crashed"):
-        rundir.prepare(tmp_path / name, overwrite=False)
-    train(setup, tmp_path / "whole", progress=False)
-
-    def crash_before_cycle_3(cycle, learners):
-        if cycle == 3:
-            raise Crash
-        return learners
-
-    with pytest.raises(Crash):
-        train(setup, tmp_path / "crashed", progress=False, fault_injection=crash_before_cycle_3)
-    train(setup, tmp_path / "crashed", progress=False, resume=True)
+    trained_whole_and_resumed(make_setup(config), tmp_path, crash_at=3)
     whole = (tmp_path / "whole" / "metrics.csv").read_bytes()
     assert (tmp_path / "crashed" / "metrics.csv").read_bytes() == whole and whole.count(b"\n") == 7
     rows = list(csv.DictReader((tmp_path / "whole" / "metrics.csv").open()))

@@ -9,6 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from run_helpers import trained_whole_and_resumed
 
 from envs_jax import env_class
 from envs_jax.base import BridgeAction
@@ -20,9 +21,7 @@ from jaxbridge.core.tasks import make_batch
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.setup import make_setup
-from jaxbridge.run import rundir
 from jaxbridge.run.evaluate import evaluate_run
-from jaxbridge.run.runner import train
 from jaxbridge.learn.transitions import PROGRESS_STEP_COST, episode_transitions
 
 TASK = LightSwitchDoorTask(num_cells=6, door_cells=(1,))  # the plan: cells 0 -> 5, then the light
@@ -127,26 +126,11 @@ def test_on_the_panel_variant_plan_progress_hands_back_past_the_door_and_ours_at
     assert (np.floor(rec.env_state.robot_x[rec.progressed]) == 3).all()
 
 
-class Crash(Exception):
-    pass
-
-
 def test_a_plan_repair_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test_rate(tmp_path):
     config = TrainConfig(approach="plan_progress", num_seeds=1, cycles=2, updates_per_cycle=10, episodes_per_cycle=2,
                          checkpoint_every=1, num_test_tasks=2)
     setup = make_setup(config)
-    for name in ("whole", "crashed"):
-        rundir.prepare(tmp_path / name, overwrite=False)
-    train(setup, tmp_path / "whole", progress=False)
-
-    def crash_before_cycle_2(cycle, learners):
-        if cycle == 2:
-            raise Crash
-        return learners
-
-    with pytest.raises(Crash):
-        train(setup, tmp_path / "crashed", progress=False, fault_injection=crash_before_cycle_2)
-    train(setup, tmp_path / "crashed", progress=False, resume=True)
+    trained_whole_and_resumed(setup, tmp_path, crash_at=2)
     whole = (tmp_path / "whole" / "metrics.csv").read_bytes()
     assert (tmp_path / "crashed" / "metrics.csv").read_bytes() == whole and whole.count(b"\n") == 3
     # evaluation (eval.py's) rebuilds the approach's meta-policy, resuming the stuck plan, and finds the last test rate
