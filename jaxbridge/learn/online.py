@@ -66,12 +66,12 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train_env.num_skills
     shared = learning.shares_network  # one copy of the seed's network for its episodes, or one each
+    config.check_buffer_fits()
 
     def bridge_params(params, eps: jax.Array, n: int) -> QBridgeParams:
         if shared:
             return QBridgeParams(q=params, epsilon=eps)
         return QBridgeParams(q=_repeat(params, n), epsilon=jnp.full(n, eps, jnp.float32))
-    config.check_buffer_fits()
 
     def seed_cycle(learner: Any, train_tasks: TaskArrays, test_tasks: TaskArrays,
                    hyper: Hyper) -> tuple[Any, CycleMetrics]:
