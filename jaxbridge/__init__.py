@@ -8,11 +8,14 @@ plumbing, the compile cache) < `core` (config, the meta-policy, bridges, task ba
 the planner (`planner`) sit below.
 
 The Python API (jaxbridge/api.py, docs/API.md): `train`, `load` (a `Policy` to `evaluate` and `render`),
-`make_env`, `tasks`, `make_config`, `TrainConfig`, and `make_train`, a whole run as one pure function.
+`make_env`, `tasks`, `make_config`, `TrainConfig`, and `make_train`, a whole run as one pure function; the
+contracts' checks `check_env` and `check_learner`.
 """
 from jaxbridge.api import (Episodes, Experiment, Hyper, Policy, TrainConfig, TrainOutput, load, make_config, make_env,
                            make_train, seed_keys, tasks, train)
 from jaxbridge.core.check_env import EnvContractError, check_env
+from jaxbridge.learn.learner import LearnerContractError, QLearner, check_learner
 
-__all__ = ["EnvContractError", "Episodes", "Experiment", "Hyper", "Policy", "TrainConfig", "TrainOutput", "check_env",
-           "load", "make_config", "make_env", "make_train", "seed_keys", "tasks", "train"]
+__all__ = ["EnvContractError", "Episodes", "Experiment", "Hyper", "LearnerContractError", "Policy", "QLearner", "TrainConfig",
+           "TrainOutput", "check_env", "check_learner", "load", "make_config", "make_env", "make_train", "seed_keys", "tasks",
+           "train"]
