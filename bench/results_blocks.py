@@ -250,7 +250,7 @@ def learners(env: str) -> str:
         step = run["steps"][name]
         lines.append(f"| {shown[name]} | {cycles_to(cycles)} | {step['wall_s'] / last:.2f} | {step['peak_rss_mib']:,.0f} |")
     lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit "
-              f"{run['commit'][:10]} (the two trainings one after another).", "", f"![{ENV_TITLES[env]}, learners](results/{env}/learners.png)"]
+              f"{run['commit'][:10]} (the two trainings one after another).", "", f"![{ENV_TITLES[env]}, learners](results/{env}/learners.png)", ""]
     return "\n".join(lines)
 
 
