@@ -18,6 +18,6 @@ scale scaling_lsd_block1 --env light_switch_door --seeds 8 --seed-block 1 --cycl
 # A sweep's settings are more slots of the same program: 4 learning-rate/epsilon settings x 64 seeds, blocks of 64.
 { start=$(date +%s)
   $py train.py --env light_switch_door --approaches ours --num-seeds 64 --seed-block 64 --cycles 3 --no-progress \
-      --sweep learning_rate=1e-3,3e-4 --sweep epsilon_decay=3.8e-5,1e-4 --out "$out/runs" --name sweep --overwrite
+      --sweep learning_rate=1e-3,3e-4 --sweep epsilon_decay=3.8e-5,1e-4 --out "${RUNS:-/tmp/gpu_runs}" --name sweep --overwrite
   echo "sweep 4 settings x 64 seeds x 3 cycles: $(( $(date +%s) - start )) s"
 } 2>&1 | tee "$out/sweep.log"
