@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from bench.records import BENCH, QUICKSTART, SUITE, SUITE_CLAIMS, authors_seed_run_s
+from bench.records import BENCH, QUICKSTART, RECORDS, SUITE, SUITE_CLAIMS, authors_seed_run_s
 from bench.results_blocks import ENV_TITLES, ENVS, env_record, label, machine_text, stat_row
 
 MISSING = "_Not measured yet: `{command}`._\n"
@@ -86,6 +86,29 @@ def bench_table() -> str:
     return "\n".join(lines) + "\n"
 
 
+GPU = RECORDS / "gpu"  # bash bench/gpu.sh's files, as they came back from the GPU machine
+
+
+def gpu_table() -> str:
+    """bench/gpu.sh's bench.scaling rows: per env and seed count, the build, first-cycle and steady-state
+    times on one GPU, in blocks of all seeds or one seed at a time, and the 4-setting sweep's time."""
+    run = read(GPU / "run.json")
+    if run is None:
+        return MISSING.format(command="bash bench/gpu.sh")
+    lines = ["| env | seeds | block | tasks and plan tables (s) | first cycle (s) | s per cycle | 100 cycles (s) "
+             "| s per seed-run | the authors' s per seed-run / ours | peak GPU memory (GiB) |", "|---|" + "---|" * 9]
+    for name in ("scaling_lsd", "scaling_doorknobs", "scaling_lsd_block1"):
+        for r in read(GPU / f"{name}.json") or []:
+            lines.append(f"| {ENV_TITLES[r['env']]} | {r['seeds']:,} | {r['block']:,} | {r['build_s']:.0f} | "
+                         f"{r['first_cycle_s']:.0f} | {r['steady_s_per_cycle']:.3f} | {r['projected_100_cycles_s']:.0f} | "
+                         f"{r['s_per_seed_run']:.2f} | {r['x_authors']:,.0f}x | {r['peak_device_bytes_so_far'] / 2**30:.1f} |")
+    sweep = (GPU / "sweep.log").read_text().strip().splitlines()[-1]
+    lines += ["", f"{sweep} (`train.py --seed-block 64`, learning rates 1e-3 and 3e-4 x epsilon decays 3.8e-5 and "
+              "1e-4, one compiled program). Measured by `bash bench/gpu.sh` on " + run["machine"] + f", commit "
+              f"{run['commit'][:10]}; {run['note']}. The files: docs/results/gpu/."]
+    return "\n".join(lines) + "\n"
+
+
 def suite_line() -> str:
     record, claims = read(SUITE), read(SUITE_CLAIMS)
     if record is None:
@@ -133,6 +156,6 @@ def readme_env(env: str) -> str:
             f"the oracle's ceiling on the same tasks is {ours['ceiling']} (docs/RESULTS.md).\n")
 
 
-BLOCKS = {"performance quickstart": quickstart_table, "performance paper": paper_table,
+BLOCKS = {"performance gpu": gpu_table, "performance quickstart": quickstart_table, "performance paper": paper_table,
           "performance bench": bench_table, "performance suite": suite_line, "readme quickstart": readme_quickstart,
           **{f"readme {env}": (lambda env=env: readme_env(env)) for env in ENVS}}
