@@ -59,7 +59,7 @@ def check_learner_spec(config: TrainConfig, env_cls) -> None:
     from jaxbridge.learn.setup import make_setup
     try:
         learner_factory(config.learner)
-        learner = make_setup(dataclasses.replace(config, approach="ours"), env_cls).learner
+        learner = make_setup(dataclasses.replace(config, approach="ours", num_seeds=1), env_cls).learner  # one seed's tasks
         if config.learner not in registered():
             check_learner(learner, config)
     except (ValueError, LearnerContractError) as err:
