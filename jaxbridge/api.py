@@ -25,8 +25,8 @@ from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
-from jaxbridge.learn.online import TrainOutput, seed_keys
-from jaxbridge.learn.setup import make_setup
+from jaxbridge.learn.online import TrainOutput
+from jaxbridge.learn.setup import make_setup, seed_keys
 from jaxbridge.run.artifacts import METRICS_CSV_FIELDS
 from jaxbridge.run.comparison import read_metrics
 

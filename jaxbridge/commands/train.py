@@ -55,10 +55,9 @@ def check_learner_spec(config: TrainConfig, env_cls) -> None:
     """Refuse a --learner that does not load or make a learner, and one of your own that breaks the learner
     contract (learn/learner.check_learner: shapes only, nothing is computed)."""
     from jaxbridge.learn.learner import LearnerContractError, check_learner
-    from jaxbridge.learn.learners import learner_factory, registered
+    from jaxbridge.learn.learners import registered
     from jaxbridge.learn.setup import make_setup
-    try:
-        learner_factory(config.learner)
+    try:  # making the setup resolves the learner by name (learners.learner_factory) and makes it
         learner = make_setup(dataclasses.replace(config, approach="ours", num_seeds=1), env_cls).learner  # one seed's tasks
         if config.learner not in registered():
             check_learner(learner, config)

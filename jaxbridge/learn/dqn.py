@@ -150,11 +150,9 @@ def init_learner(dqn: DQN, key: jax.Array) -> DQNState:
     params, norm = {"params": variables["params"]}, variables.get("norm")  # the scaling is not a parameter
     target = (jax.tree.map(jnp.copy, params) if dqn.config.target_init is TargetInit.COPY
               else {"params": dqn.net.init(jax.random.fold_in(k_init, 1), sample)["params"]})
-    return DQNState(params=params, target_params=target,
-                   opt_state=dqn.optimizer.init(params),
-                   buffer=init_buffer(empty_transition(dqn), dqn.config.buffer_capacity),
-                   key=k_run,
-                   decisions=jnp.int32(0), updates=jnp.int32(0), norm=norm)
+    return DQNState(params=params, target_params=target, opt_state=dqn.optimizer.init(params),
+                    buffer=init_buffer(empty_transition(dqn), dqn.config.buffer_capacity), key=k_run,
+                    decisions=jnp.int32(0), updates=jnp.int32(0), norm=norm)
 
 
 def td_targets(dqn: DQN, hyper: Hyper, params: Any, target_params: Any, batch: Transition, key: jax.Array,

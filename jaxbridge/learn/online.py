@@ -24,7 +24,7 @@ from jaxbridge.learn.devices import SeedMesh
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.learner import epsilon
 from jaxbridge.learn.q_bridge import QBridgeParams
-from jaxbridge.learn.setup import Setup
+from jaxbridge.learn.setup import Setup, seed_keys
 from jaxbridge.learn.transitions import episode_transitions
 
 
@@ -122,7 +122,7 @@ class Cycle:
     A slot is a (setting, seed) pair, setting-major: `settings` are configs that differ from
     `setup.config` only in their numeric hyperparameters (config.LEAF_FIELDS; default: that config
     alone), and each passes its values to its seeds' slots as leaves (learn/hyper.py), so one program
-    serves them all. Anys and metrics carry the placed slot axis of `seeds` (padded to a multiple of
+    serves them all. Learner states and metrics carry the placed slot axis of `seeds` (padded to a multiple of
     the device count and sharded over the devices: `seeds.place(...)`, `seeds.unpad(...)`). Each device
     runs the per-seed cycle on its slots one after another (learn/devices.py), so the numbers depend
     neither on the device count nor on the other settings."""
@@ -173,11 +173,6 @@ class TrainOutput:
 
     learners: Any  # leading axis: seeds
     metrics: CycleMetrics  # each field [seeds, cycles]
-
-
-def seed_keys(config: TrainConfig) -> jax.Array:
-    """The seeds' starting keys as a run of `config` uses them: seed s starts from jax.random.key(s)."""
-    return jnp.stack([jax.random.key(s) for s in config.seeds])
 
 
 def make_train(setup: Setup) -> Callable[..., TrainOutput]:

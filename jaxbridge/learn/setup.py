@@ -63,8 +63,7 @@ class Setup:
         if self.approach.low_level:
             from jaxbridge.learn.low_level import init_policies  # brax: imported only when used
             return init_policies(self)
-        keys = jnp.stack([jax.random.key(s) for s in self.config.seeds])
-        return jax.vmap(self.learner.init)(keys)
+        return jax.vmap(self.learner.init)(seed_keys(self.config))
 
     def greedy_policy(self, env: NoveltyEnv, states: Any, owner: np.ndarray) -> tuple[Bridge, Any, Controls]:
         """The approach's greedy bridge on `env`, its per-episode parameters (episode i acts with seed owner[i]'s
@@ -79,6 +78,11 @@ class Setup:
         """Q-bridge parameters for a batch of episodes: episode i acts with seed owner[i]'s greedy network (of
         the seeds' learner `states`) and exploration rate eps[i] (zeros: greedy)."""
         return QBridgeParams(q=jax.tree.map(lambda x: x[owner], jax.vmap(self.learner.greedy)(states)), epsilon=eps)
+
+
+def seed_keys(config: TrainConfig) -> jax.Array:
+    """The seeds' starting keys as a run of `config` uses them: seed s starts from jax.random.key(s)."""
+    return jnp.stack([jax.random.key(s) for s in config.seeds])
 
 
 def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> Setup:
