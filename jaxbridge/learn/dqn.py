@@ -18,7 +18,7 @@ from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
                                       candidate_skills, encode_action, input_size, task_state_split)
 from jaxbridge.learn.replay import ReplayBuffer, add, init_buffer, sample_indices
-from jaxbridge.learn.transitions import Transition, for_buffer, successor_features
+from jaxbridge.learn.transitions import Transition, empty_transitions, for_buffer, successor_features
 
 
 @struct.dataclass
@@ -132,12 +132,8 @@ def stored_transitions(dqn: DQN, transitions: Transition) -> Transition:
 def empty_transition(dqn: DQN) -> Transition:
     """The replay buffer's item: a transition without next_features (transitions.for_buffer), with its
     training task's index when the observation is split."""
-    f = jnp.zeros(dqn.stored_features, jnp.float32)
-    return for_buffer(Transition(features=f, skill=jnp.int32(0), param=jnp.float32(0), reward=jnp.float32(0),
-                                 done=jnp.bool_(True), next_features=f,
-                                 next_num_ground=jnp.zeros(dqn.env.num_skills + 1, jnp.int32),
-                                 task=None if dqn.split is None else jnp.int32(0),
-                                 steps=jnp.int32(0) if dqn.config.counts_steps else None))
+    item = empty_transitions((), dqn.stored_features, dqn.env.num_skills, dqn.config.counts_steps)
+    return for_buffer(item.replace(task=None if dqn.split is None else jnp.int32(0)))
 
 
 def init_learner(dqn: DQN, key: jax.Array) -> DQNState:

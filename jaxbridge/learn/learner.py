@@ -20,7 +20,7 @@ from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.q_bridge import QNetwork, input_size
-from jaxbridge.learn.transitions import Transition
+from jaxbridge.learn.transitions import Transition, empty_transitions
 
 
 class LearnerContractError(ValueError):
@@ -90,13 +90,7 @@ def example_transitions(learner: QLearner, config: TrainConfig) -> tuple[Transit
     """Transitions of the shapes a cycle of `config` hands `observe`: [episodes_per_cycle, train_steps], every
     other row a decision, with their step counts where a step discount is on."""
     episodes, steps = config.episodes_per_cycle, config.train_steps
-    env, width = learner.env, learner.num_features
-    features = jnp.zeros((episodes, steps, width), jnp.float32)
-    shape = (episodes, steps)
-    transitions = Transition(features=features, skill=jnp.zeros(shape, jnp.int32), param=jnp.zeros(shape, jnp.float32),
-                             reward=jnp.zeros(shape, jnp.float32), done=jnp.ones(shape, bool), next_features=features,
-                             next_num_ground=jnp.ones(shape + (env.num_skills + 1,), jnp.int32),
-                             steps=jnp.ones(shape, jnp.int32) if config.counts_steps else None)
+    transitions = empty_transitions((episodes, steps), learner.num_features, learner.env.num_skills, config.counts_steps)
     return transitions, jnp.asarray(np.arange(steps)[None, :] % 2 == 0).repeat(episodes, 0)
 
 

@@ -75,6 +75,16 @@ def episode_transitions(records: StepRecord, success: jax.Array, call_planner_sk
     return transition, decided
 
 
+def empty_transitions(shape: tuple[int, ...], num_features: int, num_skills: int, counts_steps: bool) -> Transition:
+    """Transitions of `shape` holding nothing (a state's fixed-shape slots before any is stored): zeros, done,
+    nothing applicable at the next decision; with step counts where a step discount is on."""
+    features = jnp.zeros(shape + (num_features,), jnp.float32)
+    return Transition(features=features, skill=jnp.zeros(shape, jnp.int32), param=jnp.zeros(shape, jnp.float32),
+                      reward=jnp.zeros(shape, jnp.float32), done=jnp.ones(shape, bool), next_features=features,
+                      next_num_ground=jnp.zeros(shape + (num_skills + 1,), jnp.int32),
+                      steps=jnp.zeros(shape, jnp.int32) if counts_steps else None)
+
+
 def for_buffer(transitions: Transition) -> Transition:
     """Transitions as the replay buffer keeps them: without next_features, which `successor_features`
     reads back from the features stored after them. A full-state observation is wide (Doorknobs: 2027
