@@ -23,7 +23,7 @@ from jaxbridge.learn.dqn import q_network
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import QNetwork, batch_input, best_candidate, candidate_skills, input_size
-from jaxbridge.learn.transitions import Transition
+from jaxbridge.learn.transitions import Transition, empty_transitions
 
 
 @struct.dataclass
@@ -52,11 +52,7 @@ class PQN:
         k_init, k_run = jax.random.split(key)
         params = self.net.init(k_init, jnp.zeros((1, input_size(self.env, self.num_features)), jnp.float32))
         shape = (self.config.episodes_per_cycle, self.config.train_steps)
-        features = jnp.zeros(shape + (self.num_features,), jnp.float32)
-        batch = Transition(features=features, skill=jnp.zeros(shape, jnp.int32), param=jnp.zeros(shape, jnp.float32),
-                           reward=jnp.zeros(shape, jnp.float32), done=jnp.ones(shape, bool), next_features=features,
-                           next_num_ground=jnp.zeros(shape + (self.env.num_skills + 1,), jnp.int32),
-                           steps=jnp.zeros(shape, jnp.int32) if self.config.counts_steps else None)
+        batch = empty_transitions(shape, self.num_features, self.env.num_skills, self.config.counts_steps)
         return PQNState(params=params, opt_state=self.optimizer.init(params), key=k_run, decisions=jnp.int32(0),
                         updates=jnp.int32(0), batch=batch, valid=jnp.zeros(shape, bool))
 
@@ -139,13 +135,10 @@ class PQN:
             # m, so each minibatch holds about a parts-th of the decisions.
             order = jnp.argsort(jnp.where(valid, jax.random.uniform(k, (rows,)), 2.0))
             order = jnp.pad(order, (0, size * parts - rows), constant_values=rows).reshape(size, parts).T
-            weight = jnp.where(order < rows, valid[jnp.minimum(order, rows - 1)], False).astype(jnp.float32)
-            pick = lambda x: x[jnp.minimum(order, rows - 1)]
-
-            def step(state, m):
-                return self.minibatch_step(hyper, state, jax.tree.map(lambda x: pick(x)[m], batch),
-                                           pick(targets)[m], weight[m])
-            return jax.lax.scan(step, state, jnp.arange(parts))
+            picked = jnp.minimum(order, rows - 1)  # the padding reads a real row, weighted 0
+            weight = jnp.where(order < rows, valid[picked], False).astype(jnp.float32)
+            minibatches = (jax.tree.map(lambda x: x[picked], batch), targets[picked], weight)  # each [parts, size, ...]
+            return jax.lax.scan(lambda state, part: self.minibatch_step(hyper, state, *part), state, minibatches)
 
         state, (losses, q_abs, ran) = jax.lax.scan(epoch, state, jax.random.split(k_epochs, config.pqn_epochs))
         ran = ran.astype(jnp.float32)
