@@ -37,8 +37,9 @@ def main(argv=None) -> int:
         for name, (_, flags) in LEARNERS.items()}
 
     compared = runs / f"{env}-compared"  # both runs side by side, for one table and one figure
-    for name in LEARNERS:
-        shutil.copytree(runs / f"{env}-{name}" / "ours", compared / name, dirs_exist_ok=True)
+    for name in LEARNERS:  # what the comparison reads of a run: its metrics.csv
+        (compared / name).mkdir(parents=True, exist_ok=True)
+        shutil.copy(runs / f"{env}-{name}" / "ours" / "metrics.csv", compared / name / "metrics.csv")
     write_comparison(compared, env, {name: f"ours, {label}" for name, (label, _) in LEARNERS.items()})
 
     out = args.records / env
