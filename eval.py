@@ -18,12 +18,26 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
-from jaxbridge.commands import evaluate
-from jaxbridge.learn.approaches import APPROACHES
+import jaxbridge
 from jaxbridge.utils import compile_cache
 from jaxbridge.utils.cli import ArgumentParser, non_negative_int, positive_float, positive_int, run_main
+
+
+def task_sizes(text: str) -> dict[str, int]:
+    """--task-size NAME=N[,NAME=N...] as a dict (argparse type)."""
+    sizes = {}
+    for item in filter(None, (part.strip() for part in text.split(","))):
+        name, _, value = item.partition("=")
+        try:
+            sizes[name.strip()] = int(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected NAME=N[,NAME=N...], got {text!r}") from None
+    if not sizes:
+        raise argparse.ArgumentTypeError(f"expected NAME=N[,NAME=N...], got {text!r}")
+    return sizes
 
 
 def parse_args(argv):
@@ -32,19 +46,19 @@ def parse_args(argv):
                         help="an experiment directory written by train.py (or one approach's run directory in "
                              "it): evaluate the latest checkpoint greedily; two RUNs: side by side")
     parser.add_argument("--approach", default=None, metavar="NAME",
-                        help=f"with experiment directories: which run to evaluate: an approach ({', '.join(APPROACHES)}) "
+                        help=f"with experiment directories: which run to evaluate: an approach ({', '.join(jaxbridge.APPROACHES)}) "
                              "or, in a train.py --sweep experiment, approach@setting as its directory is named "
                              "(default: ours; --sweep without it takes every run of the experiment)")
     parser.add_argument("--sweep", choices=["novelties"], default=None,
                         help="novelties: evaluate on tasks with 1, 2, ... novelty instances (see above) and "
                              "plot solve rate against their number")
     parser.add_argument("--sweep-tasks", type=positive_int, default=None,
-                        help=f"with --sweep: tasks per novelty count, met by every seed (default: {evaluate.SWEEP_TASKS})")
+                        help=f"with --sweep: tasks per novelty count, met by every seed (default: {jaxbridge.SWEEP_TASKS})")
     parser.add_argument("--sweep-seed", type=non_negative_int, default=None,
                         help="with --sweep: seed of the sweep's task draw (default: 0)")
     parser.add_argument("--sweep-out", type=Path, default=None, metavar="DIR",
                         help="with --sweep: where sweep_novelties.png/.md/.csv go (default: the first RUN)")
-    parser.add_argument("--task-size", type=evaluate.task_sizes, default=None, metavar="NAME=N[,NAME=N]",
+    parser.add_argument("--task-size", type=task_sizes, default=None, metavar="NAME=N[,NAME=N]",
                         help="with a RUN: evaluate on --num-tasks tasks per seed of these sizes instead of its test "
                              "tasks (the env's sized_task: light_switch_door cells=, doors=; doorknobs map=, doors=; "
                              "coffee cups=)")
@@ -87,10 +101,88 @@ def parse_args(argv):
     return parser.parse_args(argv)
 
 
+def check_flags(args) -> None:
+    """Refuse flags that do not go together, before anything loads."""
+    given = [flag for flag in ("sweep_out", "sweep_tasks", "sweep_seed") if getattr(args, flag) is not None]
+    drawing = args.render is not None or args.gif is not None
+    refusals = [(args.render_task is not None and not drawing, "--render-task picks the episode that --render/--gif "
+                 "draw; give --render PATH.png or --gif PATH.gif too"),
+                (args.approach is not None and not args.runs, "--approach needs an experiment directory to pick the run from"),
+                (args.sweep is None and given, f"--{given[0].replace('_', '-')} goes with --sweep" if given else ""),
+                (args.sweep is not None and not args.runs, "--sweep evaluates trained runs: give an experiment or run directory"),
+                (args.sweep is not None and (drawing or args.task_size is not None),
+                 "--sweep draws its own tasks; it does not combine with --render/--gif or --task-size"),
+                (args.sweep is None and len(args.runs) > 2, f"give one RUN, or two to compare side by side; got {len(args.runs)}"),
+                (len(args.runs) == 2 and drawing, "--render/--gif draw an episode of one run; give one RUN"),
+                (not args.runs and args.task_size is not None, "--task-size evaluates a trained RUN on larger tasks; give a RUN")]
+    for path, suffix, flag in ((args.render, ".png", "--render"), (args.gif, ".gif", "--gif")):
+        refusals += [(path is not None and path.suffix.lower() != suffix, f"{flag} writes a {suffix[1:].upper()} image: "
+                      f"give a path ending in {suffix}, got {path}"),
+                     (path is not None and not path.parent.is_dir(), f"{flag}: directory {path and path.parent} does not exist")]
+    for refused, message in refusals:
+        if refused:
+            raise jaxbridge.InputError(message)
+
+
+def evaluate(args, policy: jaxbridge.Policy) -> jaxbridge.Episodes:
+    """A run's latest checkpoint on its test tasks or --task-size tasks, with a header line."""
+    start = time.perf_counter()
+    episodes = policy.evaluate(task_size=args.task_size, num_tasks=args.num_tasks, rollout_seed=args.rollout_seed,
+                               max_memory=args.max_memory)
+    what = (f"{args.num_tasks} tasks per seed of " + ", ".join(f"{k} {v}" for k, v in args.task_size.items())
+            if args.task_size else "test tasks")
+    print(f"{policy.run_dir}: {policy.config.env}, {policy.config.approach}, checkpoint of cycle {policy.cycle}, "
+          f"greedy bridge, {what} ({time.perf_counter() - start:.1f} s including compilation)")
+    return episodes
+
+
+def sweep(args) -> int:
+    out = args.sweep_out or args.runs[0]
+    if not out.is_dir():
+        raise jaxbridge.InputError(f"--sweep-out: directory {out} does not exist")
+    start = time.perf_counter()
+    result = jaxbridge.sweep_novelties(jaxbridge.sweep_lines(args.runs, args.approach),
+                                       args.sweep_tasks or jaxbridge.SWEEP_TASKS, args.sweep_seed or 0, args.rollout_seed,
+                                       progress=lambda label: print(f"  {label} ...", flush=True))
+    print(f"{result.title} ({time.perf_counter() - start:.1f} s including compilation)")
+    print(result.markdown(), end="")
+    result.write(out)
+    print(f"wrote {out / 'sweep_novelties.png'}, .md and .csv")
+    return 0
+
+
+def draw(args, bridges: jaxbridge.Bridges, episodes: jaxbridge.Episodes) -> None:
+    if args.render is not None or args.gif is not None:
+        drawn = bridges.draw(episodes, args.render, args.gif, args.render_task, args.rollout_seed)
+        print(f"drew seed {drawn.seed}, task {drawn.task} ({'solved' if drawn.success else 'not solved'} in "
+              f"{drawn.steps} steps, {drawn.summary}) to {' and '.join(map(str, drawn.paths))}")
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles
-    return evaluate.run(args)
+    check_flags(args)
+    if args.sweep is not None:
+        return sweep(args)
+    policies = {str(run): jaxbridge.load(run, args.approach) for run in args.runs}
+    envs = {policy.config.env for policy in policies.values()}
+    if len(envs) > 1:
+        raise jaxbridge.InputError(f"side by side needs runs of one env, got {', '.join(sorted(envs))}")
+    if len(policies) == 2:
+        print(jaxbridge.side_by_side({run: evaluate(args, policy) for run, policy in policies.items()}))
+    elif policies:
+        policy = policies[str(args.runs[0])]
+        episodes = evaluate(args, policy)
+        print(episodes.table())
+        draw(args, policy, episodes)
+    else:
+        start, bridge = time.perf_counter(), jaxbridge.hand_made(args.env, args.bridge, args.test_protocol)
+        episodes = bridge.evaluate(range(args.first_seed, args.first_seed + args.num_seeds), args.num_tasks,
+                                   args.rollout_seed, args.max_memory)
+        print(f"{bridge.describe(len(episodes.seeds))} ({time.perf_counter() - start:.1f} s including compilation)")
+        print(episodes.table())
+        draw(args, bridge, episodes)
+    return 0
 
 
 if __name__ == "__main__":

@@ -24,29 +24,34 @@ See docs/PERFORMANCE.md.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import time
 from pathlib import Path
 
-from envs_jax import registered
-from jaxbridge.commands import train as command
-from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.presets import PRESETS
-from jaxbridge.learn.approaches import APPROACHES, KNOWN, LOW_LEVEL, PLAN_REPAIR
-from jaxbridge.learn.devices import configure_cpu_devices, device_count_arg, select_devices
+import jaxbridge
 from jaxbridge.utils import compile_cache, distributed
-from jaxbridge.utils.cli import ArgumentParser, UsageError, non_negative_int, positive_float, positive_int, run_main
+from jaxbridge.utils.cli import (ArgumentParser, auto_or_positive_int, non_negative_int, positive_float, positive_int,
+                                 run_main)
+from jaxbridge.utils.interrupts import EXIT_INTERRUPTED, Interrupts, run_watched
 
-DEFAULTS = TrainConfig()
+EXIT_NUMERICAL, EXIT_CANNOT_WRITE = 3, 4
+# Flags that set the run's config (flag name = TrainConfig field); --resume takes the saved config.
+CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "learner", "num_seeds", "first_seed", "cycles",
+                "episodes_per_cycle", "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus",
+                "checkpoint_every", "seed_block", "low_level_budget")
+DEFAULTS = jaxbridge.TrainConfig()
 
 
 def approach_list(text: str) -> list[str]:
     """argparse type: "all" or a comma-separated list of approach names."""
     if text.strip() == "all":
-        return list(APPROACHES)
+        return list(jaxbridge.APPROACHES)
     names = [n.strip() for n in text.split(",") if n.strip()]
-    if not names or any(n not in KNOWN for n in names):
-        unknown = ', '.join(n for n in names if n not in KNOWN) or repr(text)
-        raise argparse.ArgumentTypeError(f"unknown approach {unknown}; choose from all, {', '.join(KNOWN)}")
+    known = jaxbridge.ALL_APPROACHES
+    if not names or any(n not in known for n in names):
+        unknown = ', '.join(n for n in names if n not in known) or repr(text)
+        raise argparse.ArgumentTypeError(f"unknown approach {unknown}; choose from all, {', '.join(known)}")
     if len(set(names)) != len(names):
         raise argparse.ArgumentTypeError(f"an approach is listed twice in {text!r}")
     return names
@@ -55,10 +60,10 @@ def approach_list(text: str) -> list[str]:
 def parse_args(argv):
     p = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     d = DEFAULTS
-    p.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(registered())}, or package.module:Class "
+    p.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(jaxbridge.env_names())}, or package.module:Class "
                                               f"for an env of your own (checked first; docs/NEW_ENV.md) (default: {d.env})")
-    p.add_argument("--preset", choices=list(PRESETS), default=None,
-                   help="the values a run starts from: " + "; ".join(f"{k}: {v}" for k, v in PRESETS.items())
+    p.add_argument("--preset", choices=list(jaxbridge.PRESETS), default=None,
+                   help="the values a run starts from: " + "; ".join(f"{k}: {v}" for k, v in jaxbridge.PRESETS.items())
                         + " (flags below override it; config.json records every resolved value) (default: jaxbridge)")
     p.add_argument("--env-quirks", metavar="NAME[,NAME]", type=lambda t: tuple(n for n in t.split(",") if n and n != "none"),
                    help="behaviours of the authors' envs to switch back on (the env's quirks, e.g. Coffee's "
@@ -69,8 +74,8 @@ def parse_args(argv):
                         "env's first)")
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: the paper's figure for the env: "
-                        f"the six, {', '.join(APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
-                        f"Doorknobs figure; by name only: {', '.join([*PLAN_REPAIR, *LOW_LEVEL])})")
+                        f"the six, {', '.join(jaxbridge.APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
+                        f"Doorknobs figure; by name only: {', '.join([*jaxbridge.PLAN_REPAIR, *jaxbridge.LOW_LEVEL])})")
     p.add_argument("--learner", metavar="NAME", help="what fits the Q-function: dqn (double DQN, the paper's), pqn (no "
                    "replay or target network; q_lambda, pqn_epochs, pqn_minibatches take --sweep) or package.module:factory "
                    f"(checked first; docs/NEW_LEARNER.md) (default: {d.learner})")
@@ -111,7 +116,7 @@ def parse_args(argv):
     p.add_argument("--workers", type=positive_int, default=None,
                    help="approaches trained at the same time, in threads (default: one per CPU core, at most one "
                         "per approach); they split the devices between them; results do not depend on it")
-    p.add_argument("--devices", type=device_count_arg, default="auto", metavar="auto|N",
+    p.add_argument("--devices", type=auto_or_positive_int, default="auto", metavar="auto|N",
                    help="shard the seeds over N local devices: auto = all GPUs/TPUs, or on a CPU-only machine one "
                         "virtual CPU device per core (set before JAX starts; XLA_FLAGS="
                         "--xla_force_host_platform_device_count=K takes precedence). Seeds need not divide evenly. "
@@ -137,14 +142,47 @@ def parse_args(argv):
 
 def main(argv=None) -> int:
     args = parse_args(argv)
-    try:
-        configure_cpu_devices(args.devices)  # before anything starts JAX
-        distributed.initialize_from(args)
-        devices = select_devices(args.devices)
-    except ValueError as err:
-        raise UsageError(str(err)) from None
+    distributed.initialize_from(args)  # before anything starts JAX
+    devices = jaxbridge.local_devices(args.devices)
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles
-    return command.main(args, devices)
+    start, given = time.perf_counter(), {flag: getattr(args, flag) for flag in CONFIG_FLAGS}
+    interrupts = Interrupts(on_exit=jaxbridge.release_locks)
+    options = dict(workers=args.workers, devices=devices, progress=not args.no_progress, tensorboard=args.tensorboard)
+    if args.resume is not None:
+        clashing = [f"--{flag.replace('_', '-')}" for flag, value in given.items() if value is not None]
+        clashing += [f"--{flag}" for flag in ("overwrite", "name", "approaches", "sweep") if getattr(args, flag)]
+        if clashing:
+            raise jaxbridge.InputError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")
+        training = jaxbridge.prepare_resume(args.resume, **options)
+    else:
+        training = jaxbridge.prepare(approaches=args.approaches, out=args.out, name=args.name, overwrite=args.overwrite,
+                                     sweep=args.sweep, max_memory=args.max_memory, **options, **given)
+        if distributed.is_primary():  # stdout, as the closing summary: stderr carries progress and errors
+            print(training.describe(), flush=True)
+    try:
+        experiment = run_watched(lambda: training.run(interrupts.stop, interrupts.trained, debug=args.debug))
+    except jaxbridge.NumericalFault as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_NUMERICAL
+    except jaxbridge.Interrupted as err:
+        print(f"{err}; continue with: python train.py --resume {training.run_dir}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except jaxbridge.WriteError as err:
+        if args.debug:
+            raise
+        held = training.last_checkpoints()
+        print(f"error: {err}; stopped, " + (f"the last complete checkpoints are {held}; once it can write, continue with: "
+              f"python train.py --resume {training.run_dir}" if held else "before any checkpoint was complete"),
+              file=sys.stderr, flush=True)
+        os._exit(EXIT_CANNOT_WRITE)  # at once: orbax's unfinished writes would report at interpreter exit
+    finally:
+        interrupts.restore()
+    if distributed.is_primary():  # process 0 reports for a multi-process run
+        print(f"done in {time.perf_counter() - start:.0f} s -> {training.run_dir}/"
+              + ("  (figure: curves.png, tables: results.md)" if training.is_experiment else ""))
+        print(experiment.report())
+    return 0
+
 
 if __name__ == "__main__":
     sys.exit(run_main(main))

@@ -215,7 +215,7 @@ def test_eval_hand_made_bridges_meet_the_test_tasks_train_py_would():
 
 def test_train_runs_the_papers_figure_by_default_and_says_what_it_leaves_out():
     from envs_jax import env_class
-    from jaxbridge.commands.train import default_approaches, start_line
+    from jaxbridge.api.training import _start_line as start_line, default_approaches
     from jaxbridge.core.config import TrainConfig
 
     doorknobs = env_class("doorknobs")

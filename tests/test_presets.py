@@ -10,14 +10,14 @@ import pytest
 from envs_jax import env_class
 from envs_jax.base import BridgeObs
 from jaxbridge.core.bridges import RandomBridge
-from jaxbridge.commands.train import make_config
+from jaxbridge.api import make_config
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import AUTHORS, preset_values
 from jaxbridge.learn.dqn import learn
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.q_bridge import QNetwork
 from jaxbridge.learn.setup import make_setup
-from jaxbridge.utils.cli import UsageError
+from jaxbridge.utils.errors import InputError
 
 ENVS = ("light_switch_door", "doorknobs", "coffee")
 # reference/method.md §7: n_sample per env in the authors' logged runs (Coffee: configuration A).
@@ -26,7 +26,7 @@ AUTHORS_N_SAMPLE = {"light_switch_door": 100, "doorknobs": 10, "coffee": 10}
 
 @pytest.mark.parametrize("env", ENVS)
 def test_the_authors_preset_reaches_the_learner_and_its_bridge(env):
-    config, _ = make_config({"env": env, "preset": "authors", "num_seeds": 1})
+    config = make_config(env=env, preset="authors", num_seeds=1)
     setup = make_setup(config)
     learner_config = setup.learner.config  # what the updates, targets and polyak steps read
     expected = {**AUTHORS, "n_sample": AUTHORS_N_SAMPLE[env], "preset": "authors"}
@@ -70,7 +70,7 @@ def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_gua
 def test_the_authors_test_tasks_light_switch_door_fixed_horizon_30():
     """The authors' code's fixed horizon 30: seed 2's 20 cells and 3 doors need 32 steps (unsolvable);
     the tasks themselves are the same draws as ours."""
-    config, _ = make_config({"env": "light_switch_door", "preset": "authors", "num_seeds": 3})
+    config = make_config(env="light_switch_door", preset="authors", num_seeds=3)
     ours = make_setup(dataclasses.replace(config, test_protocol="jaxbridge")).test
     theirs = make_setup(config).test
     assert [(s.num_cells, s.door_cells) for s in theirs.specs] == [(s.num_cells, s.door_cells) for s in ours.specs]
@@ -81,7 +81,7 @@ def test_the_authors_test_tasks_light_switch_door_fixed_horizon_30():
 
 def test_the_authors_test_tasks_coffee_four_cups_horizon_100_are_both_presets_default():
     for preset in ("authors", "jaxbridge"):
-        config, _ = make_config({"env": "coffee", "preset": preset, "num_seeds": 2})
+        config = make_config(env="coffee", preset=preset, num_seeds=2)
         test = make_setup(config).test
         assert {len(s.cups) for s in test.specs} == {4} and set(test.arrays.horizons.tolist()) == {100}
     variant = make_setup(TrainConfig.for_env("coffee", num_seeds=2, test_protocol="jaxbridge")).test
@@ -90,27 +90,27 @@ def test_the_authors_test_tasks_coffee_four_cups_horizon_100_are_both_presets_de
 
 @pytest.mark.parametrize("env", ENVS)
 def test_the_jaxbridge_preset_is_the_default_config(env):
-    assert make_config({"env": env})[0] == TrainConfig.for_env(env) == TrainConfig.for_env(env, "jaxbridge")
-    assert make_config({"env": env})[0].preset == "jaxbridge"
+    assert make_config(env=env) == TrainConfig.for_env(env) == TrainConfig.for_env(env, "jaxbridge")
+    assert make_config(env=env).preset == "jaxbridge"
 
 
 def test_flags_override_the_preset_and_bad_names_are_refused():
-    config, _ = make_config({"env": "doorknobs", "preset": "authors", "batch_size": 128, "test_protocol": "jaxbridge"})
+    config = make_config(env="doorknobs", preset="authors", batch_size=128, test_protocol="jaxbridge")
     assert config.batch_size == 128 and config.n_target_sample == 1 and config.test_protocol == "jaxbridge"
-    with pytest.raises(UsageError, match="has no|has jaxbridge"):
-        make_config({"env": "doorknobs", "test_protocol": "authors"})  # Doorknobs' authors' tasks are ours
+    with pytest.raises(InputError, match="has no|has jaxbridge"):
+        make_config(env="doorknobs", test_protocol="authors")  # Doorknobs' authors' tasks are ours
     with pytest.raises(ValueError, match="unknown preset"):
         preset_values("theirs", env_class("coffee"))
-    assert make_config({"env": "coffee", "preset": "authors", "env_quirks": ()})[0].env_quirks == ()  # --env-quirks none
-    assert make_config({"env": "doorknobs", "env_quirks": ("raw_offsets",)})[0].env_quirks == ("raw_offsets",)
-    with pytest.raises(UsageError, match=r"has no quirk .shared_repeat_flag. \(its quirks: raw_offsets"):
-        make_config({"env": "doorknobs", "env_quirks": ("shared_repeat_flag",)})
+    assert make_config(env="coffee", preset="authors", env_quirks=()).env_quirks == ()  # --env-quirks none
+    assert make_config(env="doorknobs", env_quirks=("raw_offsets",)).env_quirks == ("raw_offsets",)
+    with pytest.raises(InputError, match=r"has no quirk .shared_repeat_flag. \(its quirks: raw_offsets"):
+        make_config(env="doorknobs", env_quirks=("shared_repeat_flag",))
 
 
 # ---- the authors' learner options do what they say ------------------------------------------------
 
 def test_the_authors_preset_builds_their_network_exploration_and_target():
-    config, _ = make_config({"env": "light_switch_door", "preset": "authors", "num_seeds": 1})
+    config = make_config(env="light_switch_door", preset="authors", num_seeds=1)
     setup = make_setup(config)
     assert setup.learner.net.activation == "relu" and setup.bridge(setup.test_env).explore_ground_operators
     assert (config.target_init, config.reset_optimizer) == ("apart", True)
@@ -143,7 +143,7 @@ def test_the_output_layer_starts_at_zero_or_uniform_as_pytorch(ensemble):
     assert np.all(np.abs(values) <= 1 / np.sqrt(8)) and np.abs(values).max() > 0.5 / np.sqrt(8)
     assert np.asarray(uniform.apply(params, x)).std() > 0
     assert TrainConfig.for_env("coffee", "authors").output_init == "uniform" == make_config(
-        {"env": "coffee", "preset": "authors"})[0].output_init and TrainConfig().output_init == "zero"
+        env="coffee", preset="authors").output_init and TrainConfig().output_init == "zero"
 
 
 def test_the_target_starts_as_a_copy_or_apart():

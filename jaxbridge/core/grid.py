@@ -79,13 +79,14 @@ def settings(grid: dict[str, tuple]) -> list[dict]:
     return [dict(zip(grid, values)) for values in itertools.product(*grid.values())]
 
 
-def _text(value) -> str:
+def value_text(value) -> str:
+    """A value as a sweep's text writes it (hidden_sizes (64, 64): 64x64)."""
     return "x".join(map(str, value)) if isinstance(value, tuple) else str(value)
 
 
 def setting_name(setting: dict) -> str:
     """A setting as it names its run directory and table row, e.g. learning_rate=0.0003,gamma=0.9."""
-    return ",".join(f"{key}={_text(value)}" for key, value in setting.items())
+    return ",".join(f"{key}={value_text(value)}" for key, value in setting.items())
 
 
 def program_groups(configs: list[TrainConfig]) -> list[list[int]]:

@@ -25,12 +25,13 @@ from orbax.checkpoint import checkpoint_managers
 
 from jaxbridge.learn.devices import is_prng_key
 from jaxbridge.utils.distributed import multi_process
+from jaxbridge.utils.errors import InputError
 from jaxbridge.utils.files import WriteError, write_atomic
 
 KEEP = 2
 
 
-class CheckpointError(Exception):
+class CheckpointError(InputError):
     """A checkpoint is missing, incomplete, corrupted or does not fit this run."""
 
 

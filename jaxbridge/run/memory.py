@@ -12,6 +12,7 @@ from envs_jax import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.tasks import make_batch, test_specs
 from jaxbridge.learn.setup import make_setup
+from jaxbridge.utils.errors import InputError
 from planner.tables import compile_task, table_shape
 
 # A seed's learner state lives three times at once: the state a cycle reads (kept as the last good one),
@@ -24,7 +25,7 @@ RUNTIME_BYTES = 1 << 30  # JAX, XLA's compiled programs and Python, before any s
 TABLE_COPIES = 4
 
 
-class TooBig(Exception):
+class TooBig(InputError):
     """The estimate exceeds the memory allowed; the message says what to lower."""
 
 

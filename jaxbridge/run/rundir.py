@@ -10,11 +10,13 @@ import sys
 import time
 from pathlib import Path
 
+from jaxbridge.utils.errors import InputError
+
 LOCK = ".lock"
 RUN_FILES = ("experiment.json", "config.json")  # an experiment directory, or one approach's run
 
 
-class RunDirError(Exception):
+class RunDirError(InputError):
     """A directory this run may not use (not ours, in use, a bad name): one line, exit 2."""
 
 

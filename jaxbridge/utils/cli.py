@@ -4,9 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-
-class UsageError(Exception):
-    """Bad input from the user: reported as one line and exit code 2, never as a traceback."""
+from jaxbridge.utils.errors import InputError
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -50,11 +48,12 @@ def auto_or_positive_int(text: str) -> int | None:
 
 
 def run_main(main, argv=None) -> int:
-    """Run `main(argv)`; turn UsageError into `error: ...` on stderr and exit code 2."""
+    """Run `main(argv)`; turn an InputError (bad input, from the API or the flags) into `error: ...` on
+    stderr and exit code 2."""
     try:
         return main(argv) or 0
-    except UsageError as err:
-        print(f"error: {err}", file=sys.stderr)
+    except InputError as err:
+        print(f"error: {err.as_flag()}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

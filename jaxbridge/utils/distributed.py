@@ -12,7 +12,8 @@ import argparse
 
 import jax
 
-from jaxbridge.utils.cli import UsageError, non_negative_int, positive_int
+from jaxbridge.utils.cli import non_negative_int, positive_int
+from jaxbridge.utils.errors import InputError
 
 
 def initialize(coordinator: str | None = None, num_processes: int | None = None, process_id: int | None = None) -> None:
@@ -39,14 +40,14 @@ def add_flags(parser: argparse.ArgumentParser) -> None:
 
 
 def initialize_from(args: argparse.Namespace) -> None:
-    """`initialize` as the flags of `add_flags` say (nothing without them); UsageError if they clash."""
+    """`initialize` as the flags of `add_flags` say (nothing without them); InputError if they clash."""
     manual = (args.coordinator, args.num_processes, args.process_id)
     if args.distributed and any(v is not None for v in manual):
-        raise UsageError("--distributed detects the cluster; drop --coordinator, --num-processes and --process-id")
+        raise InputError("--distributed detects the cluster; drop --coordinator, --num-processes and --process-id")
     if any(v is not None for v in manual) and not all(v is not None for v in manual):
-        raise UsageError("--coordinator, --num-processes and --process-id go together")
+        raise InputError("--coordinator, --num-processes and --process-id go together")
     if args.process_id is not None and args.process_id >= args.num_processes:
-        raise UsageError(f"--process-id {args.process_id} must be below --num-processes {args.num_processes}")
+        raise InputError(f"--process-id {args.process_id} must be below --num-processes {args.num_processes}")
     if args.distributed or args.coordinator is not None:
         initialize(args.coordinator, args.num_processes, args.process_id)
 

@@ -1,0 +1,71 @@
+"""The config of a run, resolved as train.py resolves its flags and checked against its env."""
+from __future__ import annotations
+
+import dataclasses
+from typing import Sequence
+
+from jaxbridge.api.envs import EnvLike, env_name, load_env, seed_list
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.presets import preset_values
+from jaxbridge.learn.setup import make_setup
+from jaxbridge.utils.errors import InputError
+
+
+def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = None, cycles: int | None = None,
+                **overrides) -> TrainConfig:
+    """The TrainConfig a run of `env` trains with: TrainConfig's defaults, then its preset's values for the
+    env (`preset="authors"` for the authors', default jaxbridge's), then `seeds` (a count from 0, or
+    consecutive seeds), `cycles` and any field as a keyword; None means "not given". Checked as train.py
+    checks it (InputError in one line: an unknown env, field or learner, a value out of range, a quirk or
+    test protocol the env lacks, episodes that overflow the replay buffer, a seed block above the seeds)."""
+    given = {field: value for field, value in overrides.items() if value is not None}
+    unknown = sorted(set(given) - {f.name for f in dataclasses.fields(TrainConfig)})
+    if unknown:
+        raise InputError(f"unknown TrainConfig field {', '.join(unknown)} (help(jaxbridge.TrainConfig) lists them)")
+    if seeds is not None:
+        listed = seed_list(seeds)
+        if listed != list(range(listed[0], listed[0] + len(listed))):
+            raise InputError(f"seeds must be consecutive, got {listed}")
+        given.update(first_seed=listed[0], num_seeds=len(listed))
+    if cycles is not None:
+        given["cycles"] = cycles
+    env = TrainConfig.env if env is None else env
+    env_cls = load_env(env)
+    try:
+        config = TrainConfig(env=env_name(env), **{**preset_values(given.pop("preset", TrainConfig.preset), env_cls),
+                                                   **given})
+    except ValueError as err:  # a value out of its range, e.g. a negative bonus
+        raise InputError(str(err)) from None
+    _check_fits_env(config, env_cls)
+    return config
+
+
+def _check_fits_env(config: TrainConfig, env_cls) -> None:
+    """Refuse a config the env cannot train with (see make_config)."""
+    try:
+        env_cls.check_quirks(config.env_quirks)
+    except ValueError as err:
+        raise InputError(f"{{setting}}: {err}", "env_quirks") from None
+    if config.test_protocol not in env_cls.test_protocols:
+        raise InputError(f"{{setting}} {config.test_protocol!r}: {env_cls.name} has "
+                         f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}", "test_protocol")
+    try:
+        config.check_buffer_fits()
+    except ValueError as err:
+        raise InputError(f"{{setting}}: {err}", "episodes_per_cycle") from None
+    _check_learner(config, env_cls)
+    if config.seed_block > config.num_seeds:
+        raise InputError(f"{{setting}} {config.seed_block} is larger than the {config.num_seeds} seeds", "seed_block")
+
+
+def _check_learner(config: TrainConfig, env_cls) -> None:
+    """Refuse a learner that does not load or make a learner, and one of your own that breaks the learner
+    contract (learn/learner.check_learner: shapes only, nothing is computed)."""
+    from jaxbridge.learn.learner import LearnerContractError, check_learner
+    from jaxbridge.learn.learners import registered
+    try:  # making the setup resolves the learner by name (learners.learner_factory) and makes it
+        learner = make_setup(dataclasses.replace(config, approach="ours", num_seeds=1), env_cls).learner  # one seed's tasks
+        if config.learner not in registered():
+            check_learner(learner, config)
+    except (ValueError, LearnerContractError) as err:
+        raise InputError(f"{{setting}}: {err}", "learner") from None

@@ -1,0 +1,16 @@
+"""The devices a training shards its seeds over."""
+from __future__ import annotations
+
+from jaxbridge.utils.errors import InputError
+
+
+def local_devices(count: int | None = None) -> list:
+    """The local devices to shard the seeds over: None = all of them (on a CPU-only machine one virtual CPU
+    device per core, if JAX's backend has not started yet), else the first `count` (InputError if fewer
+    exist). Call it before anything runs JAX for the CPU count to take effect."""
+    from jaxbridge.learn.devices import select_devices
+
+    try:
+        return select_devices(count)
+    except ValueError as err:
+        raise InputError(str(err)) from None
