@@ -5,7 +5,7 @@ types, `register` and `env_class` (names, envs_jax/registry.py), `envs_jax.drawi
 `jaxbridge.check_env` checks an env against the contract; docs/NEW_ENV.md walks through writing one.
 """
 from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, BridgeAction, BridgeObs, NoveltyEnv,
-                           NoveltySweep, SkillCall, SkillSpec, TaskSpec)
+                           NoveltySweep, Objects, SkillCall, SkillSpec, TaskSpec)
 from envs_jax.coffee import Coffee
 from envs_jax.doorknobs import Doorknobs
 from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchPanel
@@ -16,5 +16,5 @@ for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel):
 assert registered() == sorted(BUILTIN + VARIANTS)
 
 __all__ = ["BUILTIN", "VARIANTS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
-           "NoveltySweep", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee", "LightSwitchPanel",
+           "NoveltySweep", "Objects", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee", "LightSwitchPanel",
            "env_class", "is_builtin", "register", "registered"]

@@ -52,6 +52,38 @@ class BridgeObs:
     num_ground: jax.Array  # int32[num_skills + 1]: applicable ground instances per skill, CallPlanner last
 
 
+POSITION_DIM = 3  # an object's position: (x, y, z), unused axes zero
+
+
+@struct.dataclass
+class Objects:
+    """The paper's object-oriented view of a state: one row per object slot, slot 0 the robot.
+
+    Features are the object's type's own (`NoveltyEnv.object_types` names them), padded with zeros to the
+    widest type's; a slot of the capacity that the task does not fill is masked out, all zeros."""
+
+    type_id: jax.Array  # int32[N]: index into object_types
+    features: jax.Array  # float32[N, W]
+    mask: jax.Array  # bool[N]: a real object of the task
+    interactable: jax.Array  # bool[N]: a skill can act on it (the paper's candidates for feature selection)
+    position: jax.Array  # float32[N, 3]: where the robot would act on it, for distances
+
+    @staticmethod
+    def of_type(type_id: int, features: jax.Array, mask: jax.Array, interactable: jax.Array | bool,
+                position: jax.Array, width: int) -> "Objects":
+        """Rows of one type: features float32[n, k] (k <= width), position float32[n, p] (p <= 3);
+        masked-out rows are zeroed."""
+        n, k = features.shape
+        mask = jnp.broadcast_to(jnp.asarray(mask, bool), (n,))
+        zeroed = lambda x, size: jnp.where(mask[:, None], jnp.pad(x.astype(jnp.float32), ((0, 0), (0, size - x.shape[1]))), 0.0)
+        return Objects(type_id=jnp.full(n, type_id, jnp.int32), features=zeroed(features, width), mask=mask,
+                       interactable=mask & jnp.asarray(interactable, bool), position=zeroed(position, POSITION_DIM))
+
+    @staticmethod
+    def concat(*groups: "Objects") -> "Objects":
+        return jax.tree.map(lambda *xs: jnp.concatenate(xs), *groups)
+
+
 @struct.dataclass
 class BridgeAction:
     """A bridge's choice: a skill (num_skills = CallPlanner) and its continuous parameter; a low-level
@@ -115,6 +147,7 @@ class NoveltyEnv(abc.ABC):
       num_features: int                  F, the bridge's object-centric observation
       full_state_size: int               S, the "no feature selection" observation (padded)
       domain: planner.Domain             the planner's lifted model, which omits the novelty
+      object_types: dict[str, tuple]     the object view's types, "robot" first: type name -> feature names
     """
 
     name: ClassVar[str]
@@ -221,6 +254,24 @@ class NoveltyEnv(abc.ABC):
     @abc.abstractmethod
     def full_state(self, state: Any) -> jax.Array:
         """float32[S]: every object's raw features, padded (the "no feature selection" observation)."""
+
+    # The paper's state: a set of typed objects with real-valued features (`Objects`). Type ids index
+    # `object_types` ({type name: its feature names}, "robot" first); the robot is slot 0.
+    object_types: ClassVar[dict[str, tuple[str, ...]]] = {}
+
+    @property
+    def num_objects(self) -> int:
+        """N, the object slots of this env's capacity."""
+        raise NotImplementedError(f"{type(self).__name__} has no object view (object_types, objects)")
+
+    @property
+    def object_width(self) -> int:
+        """W, the widest type's feature count: every object's features are padded to it."""
+        return max(len(names) for names in self.object_types.values())
+
+    def objects(self, state: Any) -> Objects:
+        """The state as objects: N slots, each with its type, features, mask, interactability, position."""
+        raise NotImplementedError(f"{type(self).__name__} has no object view (object_types, objects)")
 
     @property
     def full_state_varying(self) -> np.ndarray:

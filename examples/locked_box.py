@@ -16,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax import BridgeAction, NoveltyEnv, SkillCall, SkillSpec, register
+from envs_jax import BridgeAction, NoveltyEnv, Objects, SkillCall, SkillSpec, register
 from planner import Domain, LiftedOperator, Problem
 
 GRIP, GRIP_TOLERANCE = 0.5, 0.1  # PickKey holds the key when |grip - 0.5| <= 0.1
@@ -173,6 +173,18 @@ class LockedBox(NoveltyEnv):
     def full_state(self, state: State) -> jax.Array:
         return jnp.stack([state.robot_x, state.holding.astype(jnp.float32), state.box_open.astype(jnp.float32),
                           state.task.key_cell.astype(jnp.float32) + 0.5, state.task.num_cells.astype(jnp.float32) - 0.5])
+
+    # The state as typed objects (the paper's view): the robot, the key and the box; both can be acted on.
+    object_types = {"robot": ("x", "holding"), "key": ("x", "held"), "box": ("x", "open")}
+    num_objects = 3
+
+    def objects(self, state: State) -> Objects:
+        key_x = state.task.key_cell.astype(jnp.float32) + 0.5
+        box_x = state.task.num_cells.astype(jnp.float32) - 0.5
+        row = lambda type_id, x, flag, interactable: Objects.of_type(
+            type_id, jnp.stack([x, flag.astype(jnp.float32)])[None], True, interactable, x.reshape(1, 1), 2)
+        return Objects.concat(row(0, state.robot_x, state.holding, False), row(1, key_x, state.holding, True),
+                              row(2, box_x, state.box_open, True))
 
     # ---- device: skills (each one step) ---------------------------------------------------------------
     def skill_action(self, state: State, call: SkillCall) -> jax.Array:

@@ -48,3 +48,11 @@ class StillRobot(LockedBox):
 
 
 NotAnEnv = object
+
+
+class LeakyObjects(LockedBox):
+    """An object the view masks out still carries features."""
+
+    def objects(self, state):
+        objects = super().objects(state)
+        return objects.replace(mask=objects.mask.at[2].set(False))

@@ -290,3 +290,17 @@ def test_the_env_keeps_the_env_contract():
     from jaxbridge import check_env
 
     assert check_env(LightSwitchDoor) is LightSwitchDoor  # shapes, dtypes, purity, the planner's model, the oracle on its test tasks
+
+
+@pytest.mark.parametrize("x", [2.5, 5.5])
+def test_the_object_view_holds_the_door_the_features_select(x):
+    """In a door's cell, the interactable object closest to the robot (the paper's selection over the
+    object view) is that door, with the features the bridge sees; doors and the light are the candidates."""
+    state = fresh(x, move=(0.3, 0.6), turn=(0.1, 0.2))
+    objects = jax.tree.map(np.asarray, ENV.objects(state))
+    assert ENV.num_objects == 2 + 12 + 3 and objects.mask.sum() == 2 + 10 + 2
+    assert list(np.flatnonzero(objects.interactable)) == [1, 14, 15]  # the light, door 0, door 1
+    distance = np.where(objects.interactable, np.abs(objects.position[:, 0] - x), np.inf)
+    chosen = objects.features[np.argmin(distance)]
+    np.testing.assert_array_equal(chosen[1:], np.asarray(ENV.features(state, state))[1:])
+    assert chosen[0] == x  # the door's x

@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec
 from envs_jax.precision import ExactKey, ExactWindow, exact_window
 from planner.strips import Domain, LiftedOperator, Problem
 
@@ -336,6 +336,27 @@ class LightSwitchDoor(NoveltyEnv):
         vector = jnp.concatenate([state.robot_x[None], light, cell_x,
                                   jnp.where(has_door[:, None], doors, 0.0).reshape(-1)])
         return jnp.pad(vector, (0, self.full_state_size - vector.shape[0]))
+
+    # The paper's objects (envs.md §2): the robot, the light, the cells and the doors. A door is acted on
+    # where its keys turn (its own cell, or a panel's), so that is its position.
+    object_types = {"robot": ("x",), "light": ("x", "level", "target"), "cell": ("x",),
+                    "door": ("x", "move_key", "move_target", "turn_key", "turn_target")}
+
+    @property
+    def num_objects(self) -> int:
+        return 2 + self.max_cells + self.max_doors
+
+    def objects(self, state: State) -> Objects:
+        task, width, at = state.task, self.object_width, lambda x: jnp.asarray(x, jnp.float32).reshape(-1, 1)
+        light_x = task.num_cells.astype(jnp.float32) - 0.5
+        cells = self._cell_centres()
+        doors = jnp.concatenate([at(task.door_cell + 0.5), self._keys_and_targets(state)], axis=-1)
+        return Objects.concat(
+            Objects.of_type(0, at(state.robot_x), True, False, at(state.robot_x), width),
+            Objects.of_type(1, jnp.stack([light_x, state.light_level, task.light_target])[None], True, True, at(light_x),
+                            width),
+            Objects.of_type(2, at(cells), jnp.arange(self.max_cells) < task.num_cells, False, at(cells), width),
+            Objects.of_type(3, doors, task.door_cell >= 0, True, at(task.keys_cell + 0.5), width))
 
     def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         # The authors' box is unbounded: a move past the row's ends is clipped to it and keys clip to

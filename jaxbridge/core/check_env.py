@@ -16,7 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from envs_jax.base import NoveltyEnv, SkillCall, SkillSpec
+from envs_jax.base import POSITION_DIM, NoveltyEnv, SkillCall, SkillSpec
 from jaxbridge.core.bridges import OracleBridge
 from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import evaluation_batch
@@ -171,6 +171,38 @@ def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
     for method in functions:
         _same(f"{name}.{method}", first[method], second[method])
         _same(f"{name}.{method} under vmap", first[method], batched[method][0])
+    if type(env).object_types:  # the object view (issue 37: the built-in envs gain it one by one)
+        _check_objects(env, jax.vmap(env.reset)(tasks))
+
+
+def _check_objects(env: NoveltyEnv, states: Any) -> None:
+    """The object view of a batch of states: its shapes, slot 0 the robot, finite values, every slot the
+    task does not fill masked out and zero, features zero beyond each type's own, jit and vmap agreeing."""
+    where, types = f"{type(env).__name__}.objects", list(type(env).object_types)
+    _expect(types[0] == "robot", f"{type(env).__name__}.object_types", "the robot's type first", types[0])
+    n, width = env.num_objects, env.object_width
+    objects = _calls(where, jax.jit(jax.vmap(env.objects)), states)
+    batch = (jax.tree.leaves(states)[0].shape[0],)
+    for field, dtype, shape in (("type_id", jnp.int32, (n,)), ("features", jnp.float32, (n, width)),
+                                ("mask", jnp.bool_, (n,)), ("interactable", jnp.bool_, (n,)),
+                                ("position", jnp.float32, (n, POSITION_DIM))):
+        _shape(f"{where}.{field}", getattr(objects, field), dtype, batch + shape)
+    values = jax.tree.map(np.asarray, objects)
+    _expect(((values.type_id >= 0) & (values.type_id < len(types))).all(), f"{where}.type_id",
+            f"type ids in 0..{len(types) - 1}", np.unique(values.type_id))
+    _expect((values.type_id[:, 0] == 0).all() and values.mask[:, 0].all(), where, "slot 0 the robot, a real object",
+            f"type {values.type_id[:, 0]}, mask {values.mask[:, 0]}")
+    _expect(np.isfinite(values.features).all() and np.isfinite(values.position).all(), where,
+            "finite features and positions", "NaN or inf")
+    out = ~values.mask
+    _expect(not (values.features[out].any() or values.position[out].any() or values.interactable[out].any()), where,
+            "every masked-out slot zero and not interactable", "a masked-out slot with values")
+    own = np.array([len(names) for names in type(env).object_types.values()])[values.type_id]
+    beyond = np.arange(width) >= own[..., None]
+    _expect(not values.features[beyond].any(), f"{where}.features", "zeros beyond each type's own features",
+            "values in the padding")
+    one = jax.tree.map(lambda x: x[0], states)
+    _same(where, jax.jit(env.objects)(one), jax.tree.map(lambda x: x[0], objects))
 
 
 def _shape(where: str, value: Any, dtype, shape: tuple | None = None) -> jax.Array:
