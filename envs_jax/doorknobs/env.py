@@ -22,7 +22,7 @@ from flax import struct
 
 from envs_jax import geometry
 from envs_jax.doorknobs import maps, motion
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec
 from envs_jax.doorknobs.maps import (
     ACTION_MAGNITUDE,
     BOTTOM,
@@ -309,6 +309,23 @@ class Doorknobs(NoveltyEnv):
         knob = jnp.stack([first, second, state.knob_rot[door], task.knob_target[door],
                           state.door_open[door].astype(jnp.float32)])
         return jnp.concatenate([jnp.where(jnp.any(candidates), knob, 0.0), moved])
+
+    # The paper's objects (envs.md §3): the robot, the rooms and the doors, a door with its knob (what
+    # OpenDoor turns), placed at the knob's anchor corner, as the selection measures it.
+    object_types = {"robot": ("x", "y"), "room": ("x", "y"), "door": ("x", "y", "rot", "target_rot", "open")}
+
+    @property
+    def num_objects(self) -> int:
+        return 1 + 3 * self.map_size ** 2  # the robot, R rooms, 2R door slots
+
+    def objects(self, state: State) -> Objects:
+        task, width = state.task, self.object_width
+        knob_xy = task.door_rect[:, :2]
+        doors = jnp.concatenate([knob_xy, jnp.stack([state.knob_rot, task.knob_target,
+                                                     state.door_open.astype(jnp.float32)], axis=-1)], axis=-1)
+        return Objects.concat(Objects.of_type(0, state.robot[None], True, False, state.robot[None], width),
+                              Objects.of_type(1, task.room_xy, task.room_mask, False, task.room_xy, width),
+                              Objects.of_type(2, doors, task.door_mask, True, knob_xy, width))
 
     @property
     def full_state_varying(self) -> np.ndarray:

@@ -84,6 +84,11 @@ def _check_class(cls: type) -> None:
     names = {s.name for s in skills}
     for op in domain.operators:
         _expect(op.skill in names, f"{name}.domain operator {op.name}", f"a skill among {sorted(names)}", repr(op.skill))
+    types = getattr(cls, "object_types", None)
+    _expect(isinstance(types, dict) and list(types)[:1] == ["robot"] and all(
+        isinstance(f, tuple) and f and all(isinstance(n, str) for n in f) for f in types.values()),
+        f"{name}.object_types", "the object view's types, the robot's first: {type name: (feature name, ...)}",
+        repr(types))
 
 
 def _check_specs(cls: type[NoveltyEnv], seed: int, num_test_tasks: int) -> tuple[Any, list]:
@@ -171,15 +176,13 @@ def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
     for method in functions:
         _same(f"{name}.{method}", first[method], second[method])
         _same(f"{name}.{method} under vmap", first[method], batched[method][0])
-    if type(env).object_types:  # the object view (issue 37: the built-in envs gain it one by one)
-        _check_objects(env, jax.vmap(env.reset)(tasks))
+    _check_objects(env, jax.vmap(env.reset)(tasks))
 
 
 def _check_objects(env: NoveltyEnv, states: Any) -> None:
     """The object view of a batch of states: its shapes, slot 0 the robot, finite values, every slot the
     task does not fill masked out and zero, features zero beyond each type's own, jit and vmap agreeing."""
     where, types = f"{type(env).__name__}.objects", list(type(env).object_types)
-    _expect(types[0] == "robot", f"{type(env).__name__}.object_types", "the robot's type first", types[0])
     n, width = env.num_objects, env.object_width
     objects = _calls(where, jax.jit(jax.vmap(env.objects)), states)
     batch = (jax.tree.leaves(states)[0].shape[0],)
