@@ -94,6 +94,9 @@ def parse_args(argv):
                              "(with 10 tasks per seed, K = 23 is the third seed's task 3); default: the solved task "
                              "of the first seed on which the bridge opened the most doors (the first of those; "
                              "task 0 if none is solved)")
+    parser.add_argument("--attention", action="store_true",
+                        help="with a RUN of ours_learned_selection: per seed, how often the object its attention "
+                             "weighs most at a bridge decision is the one the env's fix acts on (the oracle's)")
     parser.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
                         help="refuse an evaluation whose plan tables are estimated to exceed this many GiB "
                              "(default: the memory available when it starts)")
@@ -114,7 +117,8 @@ def check_flags(args) -> None:
                  "--sweep draws its own tasks; it does not combine with --render/--gif or --task-size"),
                 (args.sweep is None and len(args.runs) > 2, f"give one RUN, or two to compare side by side; got {len(args.runs)}"),
                 (len(args.runs) == 2 and drawing, "--render/--gif draw an episode of one run; give one RUN"),
-                (not args.runs and args.task_size is not None, "--task-size evaluates a trained RUN on larger tasks; give a RUN")]
+                (not args.runs and args.task_size is not None, "--task-size evaluates a trained RUN on larger tasks; give a RUN"),
+                (args.attention and len(args.runs) != 1, "--attention reports on one RUN's evaluation; give one RUN")]
     for path, suffix, flag in ((args.render, ".png", "--render"), (args.gif, ".gif", "--gif")):
         refusals += [(path is not None and path.suffix.lower() != suffix, f"{flag} writes a {suffix[1:].upper()} image: "
                       f"give a path ending in {suffix}, got {path}"),
@@ -174,6 +178,11 @@ def main(argv=None) -> int:
         policy = policies[str(args.runs[0])]
         episodes = evaluate(args, policy)
         print(episodes.table())
+        if args.attention:
+            looked = policy.attention(episodes, args.rollout_seed)
+            print("attention on the fix's object, per seed: " + ", ".join(
+                f"{s} {a:.2f} of {n}" for s, a, n in zip(looked.seeds, looked.agreement, looked.decisions))
+                + f"; all {looked.overall:.2f}")
         draw(args, policy, episodes)
     else:
         start, bridge = time.perf_counter(), jaxbridge.hand_made(args.env, args.bridge, args.test_protocol)

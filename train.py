@@ -75,7 +75,7 @@ def parse_args(argv):
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (default: the paper's figure for the env: "
                         f"the six, {', '.join(jaxbridge.APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
-                        f"Doorknobs figure; by name only: {', '.join([*jaxbridge.PLAN_REPAIR, *jaxbridge.LOW_LEVEL])})")
+                        f"Doorknobs figure; by name only: {', '.join([*jaxbridge.SELECTION, *jaxbridge.PLAN_REPAIR, *jaxbridge.LOW_LEVEL])})")
     p.add_argument("--learner", metavar="NAME", help="what fits the Q-function: dqn (double DQN, the paper's), pqn (no "
                    "replay or target network; q_lambda, pqn_epochs, pqn_minibatches take --sweep) or package.module:factory "
                    f"(checked first; docs/NEW_LEARNER.md) (default: {d.learner})")

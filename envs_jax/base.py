@@ -270,8 +270,14 @@ class NoveltyEnv(abc.ABC):
         return max(len(names) for names in self.object_types.values())
 
     def objects(self, state: Any) -> Objects:
-        """The state as objects: N slots, each with its type, features, mask, interactability, position."""
+        """The state as objects: N slots, each with its type, features, mask, interactability, position.
+        A feature says what an object is (a key's turn, a cup's liquid); where it is, is its position."""
         raise NotImplementedError(f"{type(self).__name__} has no object view (object_types, objects)")
+
+    def oracle_object(self, state: Any) -> jax.Array:
+        """int32[]: the slot of the object the novelty's fix acts on in this state (the oracle's), -1 if
+        none; what a learned selector's attention is measured against (eval.py --attention)."""
+        raise NotImplementedError(f"{type(self).__name__} does not say which object its fix acts on")
 
     @property
     def full_state_varying(self) -> np.ndarray:

@@ -175,16 +175,19 @@ class LockedBox(NoveltyEnv):
                           state.task.key_cell.astype(jnp.float32) + 0.5, state.task.num_cells.astype(jnp.float32) - 0.5])
 
     # The state as typed objects (the paper's view): the robot, the key and the box; both can be acted on.
-    object_types = {"robot": ("x", "holding"), "key": ("x", "held"), "box": ("x", "open")}
+    object_types = {"robot": ("holding",), "key": ("held",), "box": ("open",)}
     num_objects = 3
 
     def objects(self, state: State) -> Objects:
+        at = lambda x: jnp.reshape(x, (1, 1)).astype(jnp.float32)
         key_x = state.task.key_cell.astype(jnp.float32) + 0.5
         box_x = state.task.num_cells.astype(jnp.float32) - 0.5
-        row = lambda type_id, x, flag, interactable: Objects.of_type(
-            type_id, jnp.stack([x, flag.astype(jnp.float32)])[None], True, interactable, x.reshape(1, 1), 2)
-        return Objects.concat(row(0, state.robot_x, state.holding, False), row(1, key_x, state.holding, True),
-                              row(2, box_x, state.box_open, True))
+        return Objects.concat(Objects.of_type(0, at(state.holding), True, False, at(state.robot_x), 1),
+                              Objects.of_type(1, at(state.holding), True, True, at(key_x), 1),
+                              Objects.of_type(2, at(state.box_open), True, True, at(box_x), 1))
+
+    def oracle_object(self, state: State) -> jax.Array:
+        return jnp.where(state.holding, 2, 1).astype(jnp.int32)  # the key until it is held, then the box
 
     # ---- device: skills (each one step) ---------------------------------------------------------------
     def skill_action(self, state: State, call: SkillCall) -> jax.Array:

@@ -301,6 +301,7 @@ def test_the_object_view_holds_the_door_the_features_select(x):
     assert ENV.num_objects == 2 + 12 + 3 and objects.mask.sum() == 2 + 10 + 2
     assert list(np.flatnonzero(objects.interactable)) == [1, 14, 15]  # the light, door 0, door 1
     distance = np.where(objects.interactable, np.abs(objects.position[:, 0] - x), np.inf)
-    chosen = objects.features[np.argmin(distance)]
-    np.testing.assert_array_equal(chosen[1:], np.asarray(ENV.features(state, state))[1:])
-    assert chosen[0] == x  # the door's x
+    closest = np.argmin(distance)
+    assert closest == int(ENV.oracle_object(state))  # the door the oracle's fix acts on
+    np.testing.assert_array_equal(objects.features[closest][1:], np.asarray(ENV.features(state, state))[1:])
+    assert objects.features[closest][0] == 0.0  # the door is in its keys' cell (offset 0)

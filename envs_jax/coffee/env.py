@@ -191,8 +191,8 @@ class Coffee(NoveltyEnv):
 
     # The paper's objects (envs.md §4): the robot, the jug, the machine and the cups, every one but the
     # robot acted on by a skill. Positions are on the table (x, y), as the jug's features measure them.
-    object_types = {"robot": ("x", "y", "z", "tilt", "wrist", "fingers"), "jug": ("x", "y", "rot", "held", "filled"),
-                    "machine": ("on",), "cup": ("x", "y", "capacity", "target", "current")}
+    object_types = {"robot": ("z", "tilt", "wrist", "fingers"), "jug": ("rot", "held", "filled"), "machine": ("on",),
+                    "cup": ("capacity", "target", "current")}
 
     @property
     def num_objects(self) -> int:
@@ -200,14 +200,17 @@ class Coffee(NoveltyEnv):
 
     def objects(self, state: State) -> Objects:
         task, width, flag = state.task, self.object_width, lambda b: b.astype(jnp.float32)
-        jug = jnp.concatenate([state.jug_xy, jnp.stack([state.jug_rot, flag(state.jug_held), flag(state.jug_filled)])])
-        cups = jnp.concatenate([task.cup_xy, jnp.stack([task.cup_capacity, task.cup_target, state.cup_liquid], -1)], -1)
-        machine_xy = jnp.asarray(world.DISPENSE[None, :2])
+        jug = jnp.stack([state.jug_rot, flag(state.jug_held), flag(state.jug_filled)])
+        cups = jnp.stack([task.cup_capacity, task.cup_target, state.cup_liquid], -1)
         return Objects.concat(
-            Objects.of_type(0, state.robot[None], True, False, state.robot[None, :2], width),
+            Objects.of_type(0, state.robot[None, 2:], True, False, state.robot[None, :2], width),
             Objects.of_type(1, jug[None], True, True, state.jug_xy[None], width),
-            Objects.of_type(2, flag(state.machine_on).reshape(1, 1), True, True, machine_xy, width),
+            Objects.of_type(2, flag(state.machine_on).reshape(1, 1), True, True, jnp.asarray(world.DISPENSE[None, :2]), width),
             Objects.of_type(3, cups, task.cup_mask, True, task.cup_xy, width))
+
+    def oracle_object(self, state: State) -> jax.Array:
+        """The jug (slot 1): the novelty is its rotation."""
+        return jnp.int32(1)
 
     @property
     def full_state_varying(self) -> np.ndarray:

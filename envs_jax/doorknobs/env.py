@@ -281,14 +281,14 @@ class Doorknobs(NoveltyEnv):
     def state_vector(self, state: State) -> jax.Array:
         return jnp.concatenate([state.robot, state.knob_rot, state.door_open.astype(jnp.float32)])
 
-    def features(self, state: State, stuck_state: State) -> jax.Array:
-        """envs.md §3.8: the knob nearest to the robot (by its anchor corner) among the doors of the
-        robot's room, and how far the robot has moved since the bridge took over; zeros without a knob.
+    def oracle_object(self, state: State) -> jax.Array:
+        """The door of the knob `features` shows: the nearest of the robot's room's doors."""
+        doors, candidates, _, _, k = self._room_knobs(state)
+        return jnp.where(jnp.any(candidates), 1 + self._rooms + doors[k], -1).astype(jnp.int32)
 
-        One departure: each (|dx|, |dy|) pair is given larger first. The authors' order ties the offsets
-        to the door's orientation (a robot in a vertical doorway sees (0.05, 0.125), in a horizontal one
-        (0.125, 0.05)), and a seed whose one 2x2 training map only has it cross one kind of door then
-        turns knobs wrongly at the other kind on the test maps (docs/TUNING.md)."""
+    def _room_knobs(self, state: State):
+        """The robot's room's 4 door slots (doors, which are candidates), |dx| and |dy| from the robot to
+        each knob's anchor corner, and k: the nearest candidate's place among them."""
         task = state.task
         room, in_any = self.robot_room(state)
         # The room's 4 door slots in ascending order (top < bottom < left < right), so that ties go to the
@@ -299,6 +299,18 @@ class Doorknobs(NoveltyEnv):
         dx = jnp.abs(task.door_rect[doors, 0] - state.robot[0])
         dy = jnp.abs(task.door_rect[doors, 1] - state.robot[1])
         k = jnp.argmin(jnp.where(candidates, dx * dx + dy * dy, jnp.inf))
+        return doors, candidates, dx, dy, k
+
+    def features(self, state: State, stuck_state: State) -> jax.Array:
+        """envs.md §3.8: the knob nearest to the robot (by its anchor corner) among the doors of the
+        robot's room, and how far the robot has moved since the bridge took over; zeros without a knob.
+
+        One departure: each (|dx|, |dy|) pair is given larger first. The authors' order ties the offsets
+        to the door's orientation (a robot in a vertical doorway sees (0.05, 0.125), in a horizontal one
+        (0.125, 0.05)), and a seed whose one 2x2 training map only has it cross one kind of door then
+        turns knobs wrongly at the other kind on the test maps (docs/TUNING.md)."""
+        task = state.task
+        doors, candidates, dx, dy, k = self._room_knobs(state)
         door = doors[k]
         moved = jnp.abs(state.robot - stuck_state.robot)
         if self.raw_offsets:  # the authors' order, (|dx|, |dy|)
@@ -312,7 +324,7 @@ class Doorknobs(NoveltyEnv):
 
     # The paper's objects (envs.md §3): the robot, the rooms and the doors, a door with its knob (what
     # OpenDoor turns), placed at the knob's anchor corner, as the selection measures it.
-    object_types = {"robot": ("x", "y"), "room": ("x", "y"), "door": ("x", "y", "rot", "target_rot", "open")}
+    object_types = {"robot": (), "room": (), "door": ("rot", "target_rot", "open")}
 
     @property
     def num_objects(self) -> int:
@@ -320,12 +332,10 @@ class Doorknobs(NoveltyEnv):
 
     def objects(self, state: State) -> Objects:
         task, width = state.task, self.object_width
-        knob_xy = task.door_rect[:, :2]
-        doors = jnp.concatenate([knob_xy, jnp.stack([state.knob_rot, task.knob_target,
-                                                     state.door_open.astype(jnp.float32)], axis=-1)], axis=-1)
-        return Objects.concat(Objects.of_type(0, state.robot[None], True, False, state.robot[None], width),
-                              Objects.of_type(1, task.room_xy, task.room_mask, False, task.room_xy, width),
-                              Objects.of_type(2, doors, task.door_mask, True, knob_xy, width))
+        doors = jnp.stack([state.knob_rot, task.knob_target, state.door_open.astype(jnp.float32)], axis=-1)
+        return Objects.concat(Objects.of_type(0, jnp.zeros((1, 0)), True, False, state.robot[None], width),
+                              Objects.of_type(1, jnp.zeros((self._rooms, 0)), task.room_mask, False, task.room_xy, width),
+                              Objects.of_type(2, doors, task.door_mask, True, task.door_rect[:, :2], width))
 
     @property
     def full_state_varying(self) -> np.ndarray:

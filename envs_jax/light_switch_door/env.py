@@ -338,9 +338,10 @@ class LightSwitchDoor(NoveltyEnv):
         return jnp.pad(vector, (0, self.full_state_size - vector.shape[0]))
 
     # The paper's objects (envs.md §2): the robot, the light, the cells and the doors. A door is acted on
-    # where its keys turn (its own cell, or a panel's), so that is its position.
-    object_types = {"robot": ("x",), "light": ("x", "level", "target"), "cell": ("x",),
-                    "door": ("x", "move_key", "move_target", "turn_key", "turn_target")}
+    # where its keys turn (its own cell, or a panel's): that is its position, and its own cell is an
+    # offset from there. Positions are not features: a feature says what an object is, not where.
+    object_types = {"robot": (), "light": ("level", "target"), "cell": (),
+                    "door": ("door_offset", "move_key", "move_target", "turn_key", "turn_target")}
 
     @property
     def num_objects(self) -> int:
@@ -348,15 +349,19 @@ class LightSwitchDoor(NoveltyEnv):
 
     def objects(self, state: State) -> Objects:
         task, width, at = state.task, self.object_width, lambda x: jnp.asarray(x, jnp.float32).reshape(-1, 1)
-        light_x = task.num_cells.astype(jnp.float32) - 0.5
-        cells = self._cell_centres()
-        doors = jnp.concatenate([at(task.door_cell + 0.5), self._keys_and_targets(state)], axis=-1)
+        light_x, nothing = task.num_cells.astype(jnp.float32) - 0.5, lambda n: jnp.zeros((n, 0))
+        doors = jnp.concatenate([at(task.door_cell - task.keys_cell), self._keys_and_targets(state)], axis=-1)
         return Objects.concat(
-            Objects.of_type(0, at(state.robot_x), True, False, at(state.robot_x), width),
-            Objects.of_type(1, jnp.stack([light_x, state.light_level, task.light_target])[None], True, True, at(light_x),
-                            width),
-            Objects.of_type(2, at(cells), jnp.arange(self.max_cells) < task.num_cells, False, at(cells), width),
+            Objects.of_type(0, nothing(1), True, False, at(state.robot_x), width),
+            Objects.of_type(1, jnp.stack([state.light_level, task.light_target])[None], True, True, at(light_x), width),
+            Objects.of_type(2, nothing(self.max_cells), jnp.arange(self.max_cells) < task.num_cells, False,
+                            at(self._cell_centres()), width),
             Objects.of_type(3, doors, task.door_cell >= 0, True, at(task.keys_cell + 0.5), width))
+
+    def oracle_object(self, state: State) -> jax.Array:
+        """The door whose keys turn in the robot's cell."""
+        here = self._here(state, state.task.keys_cell)
+        return jnp.where(jnp.any(here), 2 + self.max_cells + jnp.argmax(here), -1).astype(jnp.int32)
 
     def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         # The authors' box is unbounded: a move past the row's ends is clipped to it and keys clip to

@@ -22,18 +22,19 @@ from jaxbridge.api.training import (Experiment, Training, default_approaches, ma
 from jaxbridge.core.check_env import EnvContractError, check_env
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import PRESETS
-from jaxbridge.learn.approaches import APPROACHES, KNOWN as ALL_APPROACHES, LOW_LEVEL, PLAN_REPAIR
+from jaxbridge.learn.approaches import APPROACHES, KNOWN as ALL_APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.learner import LearnerContractError, QLearner, check_learner
 from jaxbridge.learn.online import TrainOutput
 from jaxbridge.learn.setup import seed_keys
+from jaxbridge.run.attention import Attention
 from jaxbridge.run.runner import Interrupted, NumericalFault
 from jaxbridge.utils.errors import InputError
 from jaxbridge.utils.files import WriteError
 
-__all__ = ["ALL_APPROACHES", "APPROACHES", "Bridges", "Drawn", "EnvContractError", "Episodes", "Experiment", "HandMade",
+__all__ = ["ALL_APPROACHES", "APPROACHES", "Attention", "Bridges", "Drawn", "EnvContractError", "Episodes", "Experiment", "HandMade",
            "Hyper", "InputError", "LearnerContractError", "QLearner", "check_env", "check_learner",
-           "Interrupted", "LOW_LEVEL", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "Policy", "SWEEP_TASKS",
+           "Interrupted", "LOW_LEVEL", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "Policy", "SWEEP_TASKS",
            "TrainConfig", "TrainOutput", "Training", "WriteError", "default_approaches", "env_names", "hand_made",
            "load", "load_env", "local_devices", "make_config", "make_env", "make_train", "prepare", "prepare_resume",
            "release_locks",            "resume", "seed_keys", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",

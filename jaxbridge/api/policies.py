@@ -147,6 +147,17 @@ class Policy(Bridges):
         tables would exceed `max_memory` GiB (default: what is available) are refused (InputError)."""
         return self.episodes(self.tasks(tasks, task_size, seeds, num_tasks, max_memory), rollout_seed)
 
+    def attention(self, episodes: Episodes, rollout_seed: int = 0):
+        """What a learned object selector (ours_learned_selection) looks at on `episodes`' tasks: per seed,
+        the fraction of bridge decisions whose most attended object is the one the env's fix acts on
+        (`NoveltyEnv.oracle_object`). An `Attention` (run/attention.py); InputError for another approach."""
+        from jaxbridge.run.attention import attention_agreement
+
+        try:
+            return attention_agreement(self.trained, episodes.batch, rollout_seed)
+        except ValueError as err:
+            raise InputError(f"{{setting}}: {err}", "attention") from None
+
     def render(self, path: str | Path, episode: int = 0, rollout_seed: int = 0, **which_tasks) -> Path:
         """Draw episode `episode` of `evaluate(**which_tasks)` to a PNG at `path`, as eval.py --render."""
         self.draw(self.evaluate(rollout_seed=rollout_seed, **which_tasks), png=path, episode=episode,

@@ -86,7 +86,7 @@ def _check_class(cls: type) -> None:
         _expect(op.skill in names, f"{name}.domain operator {op.name}", f"a skill among {sorted(names)}", repr(op.skill))
     types = getattr(cls, "object_types", None)
     _expect(isinstance(types, dict) and list(types)[:1] == ["robot"] and all(
-        isinstance(f, tuple) and f and all(isinstance(n, str) for n in f) for f in types.values()),
+        isinstance(f, tuple) and all(isinstance(n, str) for n in f) for f in types.values()),
         f"{name}.object_types", "the object view's types, the robot's first: {type name: (feature name, ...)}",
         repr(types))
 
@@ -206,6 +206,10 @@ def _check_objects(env: NoveltyEnv, states: Any) -> None:
             "values in the padding")
     one = jax.tree.map(lambda x: x[0], states)
     _same(where, jax.jit(env.objects)(one), jax.tree.map(lambda x: x[0], objects))
+    acted_on = np.asarray(_shape(f"{type(env).__name__}.oracle_object", _calls(
+        f"{type(env).__name__}.oracle_object", jax.jit(jax.vmap(env.oracle_object)), states), jnp.int32, batch))
+    _expect(((acted_on == -1) | ((acted_on >= 0) & (acted_on < n))).all(), f"{type(env).__name__}.oracle_object",
+            f"a slot in 0..{n - 1} or -1", acted_on)
 
 
 def _shape(where: str, value: Any, dtype, shape: tuple | None = None) -> jax.Array:

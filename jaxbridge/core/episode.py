@@ -6,9 +6,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 from flax import struct
 
-from envs_jax.base import NoveltyEnv, SkillCall
+from envs_jax.base import POSITION_DIM, NoveltyEnv, SkillCall
 
 PLANNER, BRIDGE = 0, 1  # who is in control of an episode
 
@@ -30,14 +31,38 @@ class Controls:
     # the planner, which replans, or with `resume_plan` continues that plan from the state reached.
     plan_progress: bool = False
     resume_plan: bool = False
+    # The learned object selector (issue 37): the bridge sees every object of the state as a token and
+    # learns which matters; nothing says which object was closest where it got stuck.
+    objects: bool = False
+
+
+def token_width(env: NoveltyEnv) -> int:
+    """An object token's length: one-hot type, features, position relative to the robot, interactable."""
+    return len(env.object_types) + env.object_width + POSITION_DIM + 1
+
+
+def object_tokens(env: NoveltyEnv, state: Any) -> jax.Array:
+    """float32[N * token_width]: the object view as tokens, slot 0 the robot; a masked-out slot is zeros.
+    Positions relative to the robot are squashed to (-1, 1) per axis, d / (1 + |d|): exact near the
+    robot, bounded far away, so a larger test task's distances are not beyond the training task's."""
+    objects = env.objects(state)
+    kind = jax.nn.one_hot(objects.type_id, len(env.object_types)) * objects.mask[:, None]
+    offset = objects.position - objects.position[0]
+    relative = offset / (1.0 + jnp.abs(offset)) * objects.mask[:, None]
+    tokens = jnp.concatenate([kind, objects.features, relative, objects.interactable[:, None].astype(jnp.float32)], -1)
+    return tokens.reshape(-1)
 
 
 def observation_size(env: NoveltyEnv, controls: Controls) -> int:
+    if controls.objects:
+        return env.num_objects * token_width(env)
     return env.full_state_size if controls.full_state else env.num_features
 
 
 def observation(env: NoveltyEnv, controls: Controls, state: Any, stuck_state: Any) -> jax.Array:
-    """What the bridge sees: the env's object-centric features, or the full padded state."""
+    """What the bridge sees: the env's object-centric features, the full padded state, or the object tokens."""
+    if controls.objects:
+        return object_tokens(env, state)
     return env.full_state(state) if controls.full_state else env.features(state, stuck_state)
 
 

@@ -98,7 +98,14 @@ PLAN_REPAIR = {a.name: a for a in (
              "rewarded for reaching a later state of the stuck plan; then the planner replans; no CallPlanner"),
 )}
 
-KNOWN = {**APPROACHES, **LOW_LEVEL, **PLAN_REPAIR}
+# The paper's first open question (issue 37): a bridge that learns which object matters instead of
+# being shown the closest one's features (learn/object_q.py). Not among "all".
+SELECTION = {a.name: a for a in (
+    Approach("ours_learned_selection", "ours, learned selection", BridgeKind.Q, Controls(objects=True),
+             "ours with every object of the state as a token, attention choosing which matters; no hand-made selection"),
+)}
+
+KNOWN = {**APPROACHES, **LOW_LEVEL, **PLAN_REPAIR, **SELECTION}
 
 
 def get_approach(name: str) -> Approach:

@@ -11,9 +11,12 @@ import numpy as np
 import optax
 from flax import struct
 
-from envs_jax.base import NoveltyEnv
+from envs_jax.base import POSITION_DIM, NoveltyEnv
 from jaxbridge.core.config import Normalise, ParamSamples, PolyakPer, TargetInit, TrainConfig
+from jaxbridge.core.episode import token_width
+from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
+from jaxbridge.learn.object_q import ObjectQNetwork
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
                                       candidate_skills, encode_action, input_size, task_state_split)
@@ -102,13 +105,20 @@ class DQN:
         return state.buffer.size
 
 
-def q_network(config: TrainConfig) -> QNetwork:
-    return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
-                    normalise=config.normalise is Normalise.MINMAX)
+def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork:
+    """The approach's Q-network: over its observation vector, or over object tokens (learned selection)."""
+    if not get_approach(config.approach).controls.objects:
+        return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
+                        normalise=config.normalise is Normalise.MINMAX)
+    if config.q_ensemble > 1 or config.normalise is not Normalise.NONE:
+        raise ValueError(f"approach {config.approach} has one attention network: no q_ensemble or normalise")
+    position = len(env.object_types) + env.object_width
+    return ObjectQNetwork(token_width(env), env.num_skills + 2, (position, position + POSITION_DIM), config.hidden_sizes,
+                          config.activation, config.output_init)
 
 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
-    return DQN(env, config, q_network(config), clipped_adam(), num_features, split, choose_fit(config))
+    return DQN(env, config, q_network(config, env), clipped_adam(), num_features, split, choose_fit(config))
 
 
 def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> DQN:

@@ -154,4 +154,4 @@ def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_s
     refused = [name for name, used in UNSUPPORTED.items() if used(config)]
     if refused:
         raise ValueError(f"learner pqn does not support {', '.join(refused)} (set by the config or its preset)")
-    return PQN(env, config, replace(q_network(config), layer_norm=True), clipped_adam(), num_features)
+    return PQN(env, config, replace(q_network(config, env), layer_norm=True), clipped_adam(), num_features)

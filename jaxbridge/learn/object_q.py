@@ -1,0 +1,90 @@
+"""A Q-network that learns which object matters (issue 37): attention over the state's object tokens.
+
+The paper selects the features by hand, those of the interactable object closest to the robot where it
+got stuck, and names learning that selection as the first thing to try. Here the observation is every
+object of the state as a token (`core.episode.object_tokens`: one-hot type, features, position
+relative to the robot, interactable); the robot's token asks, by attention, which interactable object
+to look at, and the Q-value is an MLP of (robot, attended object, action). Any number of objects, in
+any order: the same parameters serve the training task's few and the test tasks' many.
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+
+from jaxbridge.learn.q_bridge import ACTIVATIONS, SplitInput, UniformDense, _mlp
+
+
+class ObjectAttention(nn.Module):
+    """Tokens [..., N, D] (slot 0 the robot; then `position` entries of relative position; the last entry:
+    interactable) -> (context [..., 2E], weights [..., N]): the robot's embedding and the attention-weighted
+    sum of the interactable objects'. The logits are a bounded preference for what the object is, less
+    a learned penalty per unit of distance (starting at `near`): attention starts near the robot, as the
+    paper's rule, and learns how far to look and which kinds of object outweigh nearness."""
+
+    embed: int
+    activation: str
+    position: slice  # where a token's relative position lies
+    near: float = 16.0
+    preference: float = 4.0
+
+    @nn.compact
+    def __call__(self, tokens: jax.Array) -> tuple[jax.Array, jax.Array]:
+        act = ACTIVATIONS[self.activation]
+        e = act(UniformDense(self.embed, name="embed")(tokens))
+        e = act(UniformDense(self.embed, name="mix")(e))
+        robot = e[..., 0, :]
+        query = UniformDense(self.embed, name="query")(robot)
+        keys, values = UniformDense(self.embed, name="key")(e), UniformDense(self.embed, name="value")(e)
+        distance = jnp.linalg.norm(tokens[..., self.position], axis=-1)
+        penalty = jax.nn.softplus(self.param("near", lambda _: jnp.log(jnp.expm1(jnp.float32(self.near)))))
+        # What an object is may move the attention by at most `preference` against its distance: learned on
+        # the few objects of a training task, an unbounded preference would override distance on the many of
+        # a test task, where it was never tested.
+        content = jnp.einsum("...ne,...e->...n", keys, query) / jnp.sqrt(self.embed)
+        logits = self.preference * jnp.tanh(content / self.preference) - penalty * distance
+        candidate = tokens[..., -1] > 0.5
+        weights = jax.nn.softmax(jnp.where(candidate, logits, -jnp.inf), axis=-1)
+        weights = jnp.where(candidate.any(-1, keepdims=True), weights, 0.0)  # none to look at: zeros
+        return jnp.concatenate([robot, jnp.einsum("...n,...ne->...e", weights, values)], -1), weights
+
+
+class ObjectQNetwork(nn.Module):
+    """Q(object tokens, skill, param): attention context ++ action -> MLP -> scalar. Takes the same inputs
+    as QNetwork (a whole input [..., F + A] or a SplitInput), F any multiple of `token_width`."""
+
+    token_width: int
+    action_width: int  # one-hot over the skills and CallPlanner, and the parameter
+    position: tuple[int, int]  # the token entries of the relative position
+    hidden_sizes: Sequence[int] = (32, 32)
+    activation: str = "leaky_relu"
+    output_init: str = "zero"
+    layer_norm: bool = False
+
+    def split(self, x: jax.Array | SplitInput) -> tuple[jax.Array, jax.Array]:
+        if isinstance(x, SplitInput):
+            return x.observation, x.action
+        return x[..., :-self.action_width], x[..., -self.action_width:]
+
+    def encoder(self, **kwargs) -> ObjectAttention:
+        return ObjectAttention(self.hidden_sizes[0], self.activation, slice(*self.position), **kwargs)
+
+    def tokens(self, observation: jax.Array) -> jax.Array:
+        return observation.reshape(observation.shape[:-1] + (-1, self.token_width))
+
+    @nn.compact
+    def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
+        observation, action = self.split(x)
+        context, _ = self.encoder(name="attention")(self.tokens(observation))
+        # The context's share of the first layer once per observation, however many candidate actions.
+        q = _mlp(SplitInput(context, action), self.hidden_sizes, self.activation, self.output_init, self.layer_norm)
+        return q[None] if members else q
+
+
+def attention(net: ObjectQNetwork, variables, observation: jax.Array) -> jax.Array:
+    """float32[..., N]: how much the robot attends to each object of `observation` (zero for the robot and
+    the objects no skill acts on)."""
+    return net.encoder(parent=None).apply({"params": variables["params"]["attention"]}, net.tokens(observation))[1]

@@ -1,0 +1,95 @@
+"""The learned object selector (issue 37): its network reads any number of objects in any order, looks only
+at objects a skill can act on, and the approach trains, checkpoints and evaluates as every other."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from envs_jax import env_class
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.episode import object_tokens, token_width
+from jaxbridge.learn.dqn import q_network
+from jaxbridge.learn.object_q import attention
+from jaxbridge.learn.q_bridge import encode
+
+ENV = env_class("light_switch_door")
+
+
+def lsd(cells: int, doors: tuple[int, ...], robot_cell: int):
+    """An LSD env, a state of one task with the robot in `robot_cell`, and its object tokens."""
+    spec = ENV.sized_task(np.random.default_rng(0), cells, len(doors)).__class__(cells, doors)
+    env = ENV.for_tasks([spec])
+    state = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))).replace(robot_x=jnp.float32(robot_cell + 0.5))
+    return env, object_tokens(env, state)
+
+
+def network(env):
+    net = q_network(TrainConfig(approach="ours_learned_selection"), env)
+    width = env.num_objects * token_width(env)
+    x = encode(env, jnp.zeros(width), jnp.int32(0), jnp.float32(0.5))
+    params = net.init(jax.random.key(0), x)
+    # a non-zero output layer, so that the Q-values say something (it starts at zero)
+    return net, jax.tree.map(lambda p: p + 0.1 * jax.random.normal(jax.random.key(1), p.shape), params)
+
+
+def q_values(env, net, params, tokens):
+    skills, param = jnp.arange(env.num_skills + 1), jnp.full(env.num_skills + 1, 0.5)
+    return np.asarray(net.apply(params, encode(env, tokens, skills, param)))
+
+
+def test_tokens_hold_each_real_object_and_mark_what_can_be_acted_on():
+    env, tokens = lsd(6, (1, 3), robot_cell=3)
+    rows = np.asarray(tokens).reshape(env.num_objects, token_width(env))
+    types, interactable, x = rows[:, :4].argmax(1), rows[:, -1], rows[:, 9]
+    assert types[0] == 0 and not rows[0, 4:].any()  # the robot first: no features, at itself
+    assert list(np.flatnonzero(interactable)) == [1, 8, 9]  # the light and the two doors; cells are not acted on
+    assert rows[9, 4:9].tolist() == [0.0, 0.0, 0.5, 0.0, 0.75] and x[9] == 0.0  # door 1's keys and targets, here
+    assert x[8] == pytest.approx(-2 / 3) and x[1] == pytest.approx(2 / 3)  # door 0 two cells back, the light two ahead
+
+
+def test_the_network_reads_any_number_of_objects_in_any_order():
+    env, tokens = lsd(6, (1, 3), robot_cell=3)
+    net, params = network(env)
+    q = q_values(env, net, params, tokens)
+    width = token_width(env)
+    rows = tokens.reshape(-1, width)
+    order = np.r_[0, np.random.default_rng(1).permutation(np.arange(1, env.num_objects))]
+    np.testing.assert_allclose(q_values(env, net, params, rows[order].reshape(-1)), q, rtol=1e-5, atol=1e-6)
+    padded = jnp.concatenate([tokens, jnp.zeros(5 * width)])  # five more empty slots: a larger env's padding
+    np.testing.assert_allclose(q_values(env, net, params, padded), q, rtol=1e-5, atol=1e-6)
+    bigger, more = lsd(12, (1, 3, 7, 9), robot_cell=3)  # a larger task: the same parameters apply
+    assert q_values(bigger, net, params, more).shape == q.shape and np.isfinite(q_values(bigger, net, params, more)).all()
+
+
+def test_attention_goes_only_to_objects_a_skill_can_act_on():
+    env, tokens = lsd(6, (1, 3), robot_cell=3)
+    net, params = network(env)
+    weights = np.asarray(attention(net, params, tokens))
+    assert weights.shape == (env.num_objects,) and weights.sum() == pytest.approx(1.0)
+    assert set(np.flatnonzero(weights)) <= {1, 8, 9}
+
+
+def test_the_approach_refuses_what_its_network_does_not_have():
+    with pytest.raises(ValueError, match="no q_ensemble or normalise"):
+        q_network(TrainConfig(approach="ours_learned_selection", q_ensemble=2), ENV())
+
+
+def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_looks_at(tmp_path):
+    """LSD, 2 seeds x 2 cycles: the run's files, its checkpoint evaluated, and eval.py --attention's line."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    run = lambda *args: subprocess.run([sys.executable, *args], cwd=root, capture_output=True, text=True, timeout=600)
+    trained = run("train.py", "--approaches", "ours_learned_selection", "--num-seeds", "2", "--cycles", "2",
+                  "--out", str(tmp_path), "--no-progress")
+    assert trained.returncode == 0, trained.stderr
+    experiment = tmp_path / "light_switch_door"
+    looked = run("eval.py", str(experiment), "--approach", "ours_learned_selection", "--attention")
+    assert looked.returncode == 0, looked.stderr
+    line = looked.stdout.splitlines()[-1]
+    assert line.startswith("attention on the fix's object, per seed: 0 ") and "; all " in line
+    refused = run("eval.py", str(experiment / "ours_learned_selection"), str(experiment / "ours_learned_selection"),
+                  "--attention")
+    assert refused.returncode == 2 and "--attention reports on one RUN's evaluation" in refused.stderr
