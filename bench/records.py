@@ -43,18 +43,24 @@ def shown(path: Path) -> str:
     return str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path)
 
 
-def run_child(command: list[str]) -> dict:
-    """Run `command` from the repository root with this process's output; its wall time and peak RSS."""
+def run_child(command: list[str], keep_stdout: bool = False) -> dict:
+    """Run `command` from the repository root with this process's output; its wall time and peak RSS (and,
+    with `keep_stdout`, what it printed, shown here too)."""
     print(f"$ {' '.join(command)}", flush=True)
     start = time.perf_counter()
-    child = subprocess.Popen([sys.executable, *command[1:]], cwd=ROOT)  # command[0] is "python", as shown
+    child = subprocess.Popen([sys.executable, *command[1:]], cwd=ROOT,  # command[0] is "python", as shown
+                             stdout=subprocess.PIPE if keep_stdout else None, text=True)
+    printed = child.stdout.read() if keep_stdout else None  # to its end, before the wait: a full pipe would block it
+    if printed is not None:
+        print(printed, end="", flush=True)
     _, status, usage = os.wait4(child.pid, 0)  # the child's own resource usage, not all children's
     code = os.waitstatus_to_exitcode(status)
     if code != 0:
         raise SystemExit(f"bench: '{' '.join(command)}' failed (exit {code})")
     return {"command": " ".join(command), "wall_s": round(time.perf_counter() - start, 1),
             "peak_rss_mib": round(usage.ru_maxrss / 2**10, 1), "cpu_s": round(usage.ru_utime + usage.ru_stime, 1),
-            "load_after": round(os.getloadavg()[0], 2)}  # cpu_s / wall_s vs the cores: how much else shared them
+            "load_after": round(os.getloadavg()[0], 2),  # cpu_s / wall_s vs the cores: how much else shared them
+            **({"stdout": printed} if keep_stdout else {})}
 
 
 def cpu_model() -> str:

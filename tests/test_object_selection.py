@@ -69,9 +69,20 @@ def test_attention_goes_only_to_objects_a_skill_can_act_on():
     assert set(np.flatnonzero(weights)) <= {1, 8, 9}
 
 
+def test_an_ensemble_is_members_of_their_own_whose_minimum_is_the_value():
+    env, tokens = lsd(6, (1, 3), robot_cell=3)
+    net = q_network(TrainConfig(approach="ours_learned_selection", q_ensemble=2, output_init="uniform"), env)
+    x = encode(env, tokens, jnp.arange(env.num_skills + 1), jnp.full(env.num_skills + 1, 0.5))
+    params = net.init(jax.random.key(0), x)
+    members = np.asarray(net.apply(params, x, members=True))
+    assert members.shape == (2, env.num_skills + 1) and not np.allclose(members[0], members[1])
+    np.testing.assert_array_equal(np.asarray(net.apply(params, x)), members.min(0))
+    assert np.asarray(attention(net, params, tokens)).sum() == pytest.approx(1.0)
+
+
 def test_the_approach_refuses_what_its_network_does_not_have():
-    with pytest.raises(ValueError, match="no q_ensemble or normalise"):
-        q_network(TrainConfig(approach="ours_learned_selection", q_ensemble=2), ENV())
+    with pytest.raises(ValueError, match="does not scale its object tokens: no normalise"):
+        q_network(TrainConfig(approach="ours_learned_selection", normalise="minmax"), ENV())
 
 
 def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_looks_at(tmp_path):

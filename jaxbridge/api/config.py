@@ -7,6 +7,7 @@ from typing import Sequence
 from jaxbridge.api.envs import EnvLike, env_name, load_env, seed_list
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import preset_values
+from jaxbridge.learn.approaches import BridgeKind, get_approach
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.errors import InputError
 
@@ -64,7 +65,9 @@ def _check_learner(config: TrainConfig, env_cls) -> None:
     from jaxbridge.learn.learner import LearnerContractError, check_learner
     from jaxbridge.learn.learners import registered
     try:  # making the setup resolves the learner by name (learners.learner_factory) and makes it
-        learner = make_setup(dataclasses.replace(config, approach="ours", num_seeds=1), env_cls).learner  # one seed's tasks
+        learning = get_approach(config.approach).bridge is BridgeKind.Q  # else ours': what the learner would fit
+        learner = make_setup(dataclasses.replace(config, approach=config.approach if learning else "ours", num_seeds=1),
+                             env_cls).learner  # one seed's tasks
         if config.learner not in registered():
             check_learner(learner, config)
     except (ValueError, LearnerContractError) as err:

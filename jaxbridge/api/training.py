@@ -160,7 +160,7 @@ def prepare(env: EnvLike | None = None, approaches: str | Sequence[str] | None =
         rundir.check_name(name)
     config = make_config(env, seeds, cycles, **overrides)
     env_cls = load_env(config.env)
-    names = default_approaches(env_cls) if approaches is None else _approach_list(approaches)
+    names = default_approaches(env_cls) if approaches is None else _approach_list(approaches, config, env_cls)
     hyper_grid = _sweep_grid(sweep)
     _check_memory(config, env_cls, names, len(grid.settings(hyper_grid)), workers, max_memory)
     _check_reachable(config, env_cls)
@@ -244,13 +244,18 @@ def default_approaches(env_cls) -> list[str]:
     return list(env_cls.default_approaches or APPROACHES)
 
 
-def _approach_list(approaches: str | Sequence[str]) -> list[str]:
+def _approach_list(approaches: str | Sequence[str], config: TrainConfig, env_cls) -> list[str]:
+    """The approaches by name, each known and its Q-network buildable with the config (e.g. the learned
+    selector refuses the authors' input scaling)."""
+    from jaxbridge.learn.dqn import q_network
+
     names = [approaches] if isinstance(approaches, str) else list(approaches)
     for approach in names:
         try:
             get_approach(approach)
+            q_network(dataclasses.replace(config, approach=approach), env_cls())
         except ValueError as err:
-            raise InputError(str(err)) from None
+            raise InputError(f"{{setting}}: {err}", "approaches") from None
     if not names or len(set(names)) != len(names):
         raise InputError(f"approaches: one or more names, none twice; got {names}")
     return names

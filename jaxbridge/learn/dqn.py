@@ -110,11 +110,11 @@ def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork
     if not get_approach(config.approach).controls.objects:
         return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
                         normalise=config.normalise is Normalise.MINMAX)
-    if config.q_ensemble > 1 or config.normalise is not Normalise.NONE:
-        raise ValueError(f"approach {config.approach} has one attention network: no q_ensemble or normalise")
+    if config.normalise is not Normalise.NONE:
+        raise ValueError(f"approach {config.approach} does not scale its object tokens: no normalise")
     position = len(env.object_types) + env.object_width
     return ObjectQNetwork(token_width(env), env.num_skills + 2, (position, position + POSITION_DIM), config.hidden_sizes,
-                          config.activation, config.output_init)
+                          config.activation, config.output_init, ensemble=config.q_ensemble)
 
 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:

@@ -52,22 +52,16 @@ class ObjectAttention(nn.Module):
         return jnp.concatenate([robot, jnp.einsum("...n,...ne->...e", weights, values)], -1), weights
 
 
-class ObjectQNetwork(nn.Module):
-    """Q(object tokens, skill, param): attention context ++ action -> MLP -> scalar. Takes the same inputs
-    as QNetwork (a whole input [..., F + A] or a SplitInput), F any multiple of `token_width`."""
+class ObjectQMember(nn.Module):
+    """One Q-function of object tokens: attention context ++ action -> MLP -> scalar (a scan's step)."""
 
     token_width: int
     action_width: int  # one-hot over the skills and CallPlanner, and the parameter
     position: tuple[int, int]  # the token entries of the relative position
-    hidden_sizes: Sequence[int] = (32, 32)
-    activation: str = "leaky_relu"
-    output_init: str = "zero"
-    layer_norm: bool = False
-
-    def split(self, x: jax.Array | SplitInput) -> tuple[jax.Array, jax.Array]:
-        if isinstance(x, SplitInput):
-            return x.observation, x.action
-        return x[..., :-self.action_width], x[..., -self.action_width:]
+    hidden_sizes: Sequence[int]
+    activation: str
+    output_init: str
+    layer_norm: bool
 
     def encoder(self, **kwargs) -> ObjectAttention:
         return ObjectAttention(self.hidden_sizes[0], self.activation, slice(*self.position), **kwargs)
@@ -76,15 +70,48 @@ class ObjectQNetwork(nn.Module):
         return observation.reshape(observation.shape[:-1] + (-1, self.token_width))
 
     @nn.compact
-    def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
-        observation, action = self.split(x)
+    def __call__(self, carry: None, x: jax.Array | SplitInput) -> tuple[None, jax.Array]:
+        observation, action = (x.observation, x.action) if isinstance(x, SplitInput) else (
+            x[..., :-self.action_width], x[..., -self.action_width:])
         context, _ = self.encoder(name="attention")(self.tokens(observation))
         # The context's share of the first layer once per observation, however many candidate actions.
-        q = _mlp(SplitInput(context, action), self.hidden_sizes, self.activation, self.output_init, self.layer_norm)
-        return q[None] if members else q
+        return carry, _mlp(SplitInput(context, action), self.hidden_sizes, self.activation, self.output_init,
+                           self.layer_norm)
+
+
+class ObjectQNetwork(nn.Module):
+    """Q(object tokens, skill, param), taking the same inputs as QNetwork (a whole input [..., F + A] or a
+    SplitInput), F any multiple of `token_width`; with `ensemble` > 1, members of their own (attention and
+    MLP) whose value is their minimum, as QNetwork's."""
+
+    token_width: int
+    action_width: int
+    position: tuple[int, int]
+    hidden_sizes: Sequence[int] = (32, 32)
+    activation: str = "leaky_relu"
+    output_init: str = "zero"
+    layer_norm: bool = False
+    ensemble: int = 1
+
+    def fields(self) -> tuple:
+        return (self.token_width, self.action_width, self.position, tuple(self.hidden_sizes), self.activation,
+                self.output_init, self.layer_norm)
+
+    @nn.compact
+    def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
+        if self.ensemble == 1:
+            q = ObjectQMember(*self.fields(), name="member")(None, x)[1][None]
+        else:  # one after another (a scan over stacked parameters), as QNetwork's members, for the same reason
+            scan = nn.scan(ObjectQMember, variable_axes={"params": 0}, split_rngs={"params": True},
+                           in_axes=nn.broadcast, length=self.ensemble)
+            _, q = scan(*self.fields(), name="members")(None, x)
+        return q if members else jnp.min(q, axis=0)
 
 
 def attention(net: ObjectQNetwork, variables, observation: jax.Array) -> jax.Array:
     """float32[..., N]: how much the robot attends to each object of `observation` (zero for the robot and
-    the objects no skill acts on)."""
-    return net.encoder(parent=None).apply({"params": variables["params"]["attention"]}, net.tokens(observation))[1]
+    the objects no skill acts on); of an ensemble, the first member's."""
+    params = variables["params"]
+    params = params["member"] if net.ensemble == 1 else jax.tree.map(lambda x: x[0], params["members"])
+    member = ObjectQMember(*net.fields(), parent=None)
+    return member.encoder(parent=None).apply({"params": params["attention"]}, member.tokens(observation))[1]
