@@ -254,9 +254,53 @@ def learners(env: str) -> str:
     return "\n".join(lines)
 
 
+def sweep_ratios(sweep_rows: list[dict], line: str, reference: str) -> list[float]:
+    """Per novelty count, `line`'s mean solve rate over `reference`'s (a sweep.csv's rows; NaN where the
+    reference solves none)."""
+    counted = [k for k in sweep_rows[0] if k not in ("line", "seed", "tasks", "solve_rate")][0]
+    means: dict[str, dict[int, list[float]]] = {}
+    for row in sweep_rows:
+        means.setdefault(row["line"], {}).setdefault(int(row[counted]), []).append(float(row["solve_rate"] or "nan"))
+    return [float(np.mean(means[line][k]) / np.mean(rates)) if np.mean(rates) > 0 else float("nan")
+            for k, rates in sorted(means[reference].items())]
+
+
+def selection(env: str) -> str:
+    """RESULTS.md's table of the learned object selector beside ours on `env`'s test seeds (bench.selection's
+    records): test solve rates, what it looks at, its cost, and each bar of issue 37 measured."""
+    folder = RECORDS / env
+    run = read_json(folder / "selection.json")
+    if run is None:
+        return f"_Not generated yet: `python -m bench.selection --env {env}`._\n"
+    by_run, last = by_approach(read_csv(folder / "selection.csv"))
+    sweep_rows = read_csv(folder / "selection_sweep.csv")
+    elapsed = {name: run["elapsed_s"][name] / last for name in run["approaches"]}
+    reward = {name: float(by_run[name][last]["test_smooth_reward_mean"]) for name in run["approaches"]}
+    ratios = sweep_ratios(sweep_rows, label("ours_learned_selection"), label("ours"))
+    lines = [f"Test seeds {run['seeds']}, {last} cycles; each cell: mean [95% CI] over seeds, IQM [95% CI] beside it.",
+             "", *table_header(last)]
+    lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
+    lines += ["", "| approach | cycles to a mean of 0.9 | seconds per cycle (its training's wall time / cycles) |",
+              "|---|---|---|"]
+    lines += [f"| {label(name)} | {cycles_to(by_run[name])} | {elapsed[name]:.2f} |" for name in run["approaches"]]
+    lines += ["", f"* Smooth test reward at cycle {last}, learned selection over ours: "
+              f"{reward['ours_learned_selection'] / reward['ours']:.2f} (the bar: 0.9 or more).",
+              f"* Generalisation sweep, learned selection's mean solve rate over ours' at each count: lowest "
+              f"{np.nanmin(ratios):.2f} (the bar: 0.9 or more at every count).",
+              f"* A cycle of the learned selection costs {elapsed['ours_learned_selection'] / elapsed['ours']:.1f}x "
+              f"ours' (the bar: 3x at most); the run's peak memory (both trainings, one after the other): "
+              f"{run['steps']['train']['peak_rss_mib']:,.0f} MiB.",
+              f"* What it looks at (test tasks, greedy; `{run['steps']['attention']['command']}`): {run['attention']}.",
+              "", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit {run['commit'][:10]}.",
+              "", f"![{ENV_TITLES[env]}, learned selection](results/{env}/selection.png)", "",
+              novelty_table(env, sweep_rows, run["seeds"], run["steps"]["sweep"]["command"])]
+    return "\n".join(lines)
+
+
 BLOCKS = {**{f"headline {env}": (lambda env=env: headline(env)) for env in ENVS},
           **{f"sweep {env}": (lambda env=env: sweep_table(env)) for env in ENVS},
           **{f"plan repair {env}": (lambda env=env: plan_repair(env)) for env in ENVS + VARIANTS},
-          **{f"learners {env}": (lambda env=env: learners(env)) for env in ENVS}}
+          **{f"learners {env}": (lambda env=env: learners(env)) for env in ENVS},
+          **{f"selection {env}": (lambda env=env: selection(env)) for env in ENVS}}
 
 
