@@ -15,7 +15,7 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
-from jaxbridge.learn.q_bridge import ACTIVATIONS, SplitInput, UniformDense, _mlp
+from jaxbridge.learn.q_bridge import ACTIVATIONS, SplitInput, UniformDense, mlp
 
 
 class ObjectAttention(nn.Module):
@@ -47,7 +47,8 @@ class ObjectAttention(nn.Module):
         content = jnp.einsum("...ne,...e->...n", keys, query) / jnp.sqrt(self.embed)
         logits = self.preference * jnp.tanh(content / self.preference) - penalty * distance
         candidate = tokens[..., -1] > 0.5
-        weights = jax.nn.softmax(jnp.where(candidate, logits, -jnp.inf), axis=-1)
+        # A large finite floor, not -inf: with nothing to look at, the softmax and its gradient stay finite.
+        weights = jax.nn.softmax(jnp.where(candidate, logits, -1e9), axis=-1)
         weights = jnp.where(candidate.any(-1, keepdims=True), weights, 0.0)  # none to look at: zeros
         return jnp.concatenate([robot, jnp.einsum("...n,...ne->...e", weights, values)], -1), weights
 
@@ -75,7 +76,7 @@ class ObjectQMember(nn.Module):
             x[..., :-self.action_width], x[..., -self.action_width:])
         context, _ = self.encoder(name="attention")(self.tokens(observation))
         # The context's share of the first layer once per observation, however many candidate actions.
-        return carry, _mlp(SplitInput(context, action), self.hidden_sizes, self.activation, self.output_init,
+        return carry, mlp(SplitInput(context, action), self.hidden_sizes, self.activation, self.output_init,
                            self.layer_norm)
 
 

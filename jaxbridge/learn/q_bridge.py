@@ -106,8 +106,9 @@ ACTIVATIONS = {"leaky_relu": lambda x: nn.leaky_relu(x, LEAKY_SLOPE), "relu": nn
 OUTPUT_SCALES = {"zero": 0.0, "uniform": 1.0}  # TrainConfig.output_init -> the output layer's init bound
 
 
-def _mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int], activation: str, output_init: str,
-         layer_norm: bool = False) -> jax.Array:
+def mlp(x: jax.Array | SplitInput, hidden_sizes: Sequence[int], activation: str, output_init: str,
+        layer_norm: bool = False) -> jax.Array:
+    """Hidden layers of `hidden_sizes`, then a scalar output (inside a compact module)."""
     for size in hidden_sizes:
         x = UniformDense(size)(x)
         x = ACTIVATIONS[activation](nn.LayerNorm()(x) if layer_norm else x)
@@ -122,7 +123,7 @@ class _Member(nn.Module):
 
     @nn.compact
     def __call__(self, carry: None, x: jax.Array | SplitInput) -> tuple[None, jax.Array]:
-        return carry, _mlp(x, self.hidden_sizes, self.activation, self.output_init, self.layer_norm)
+        return carry, mlp(x, self.hidden_sizes, self.activation, self.output_init, self.layer_norm)
 
 
 def scaled_input(x: jax.Array | SplitInput, shift: jax.Array, scale: jax.Array) -> jax.Array | SplitInput:
@@ -172,7 +173,7 @@ class QNetwork(nn.Module):
                          layer_norm=self.layer_norm, name="net")(x, members)
             return q * norm["y_scale"] + norm["y_shift"]
         if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
-            q = _mlp(x, self.hidden_sizes, self.activation, self.output_init, self.layer_norm)[None]
+            q = mlp(x, self.hidden_sizes, self.activation, self.output_init, self.layer_norm)[None]
         else:
             # Members one after another (a scan over their stacked parameters), not vmapped: a member
             # axis inside the per-seed program made XLA compile the gradient differently with the
