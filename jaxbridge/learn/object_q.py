@@ -33,12 +33,12 @@ class ObjectAttention(nn.Module):
 
     @nn.compact
     def __call__(self, tokens: jax.Array) -> tuple[jax.Array, jax.Array]:
+        # One layer per token for its key and its value: every stored transition's every object passes
+        # them at each update, so they are what the network costs; the MLP above adds the depth.
         act = ACTIVATIONS[self.activation]
-        e = act(UniformDense(self.embed, name="embed")(tokens))
-        e = act(UniformDense(self.embed, name="mix")(e))
-        robot = e[..., 0, :]
+        robot = act(UniformDense(self.embed, name="robot")(tokens[..., 0, :]))
         query = UniformDense(self.embed, name="query")(robot)
-        keys, values = UniformDense(self.embed, name="key")(e), UniformDense(self.embed, name="value")(e)
+        keys, values = UniformDense(self.embed, name="key")(tokens), act(UniformDense(self.embed, name="value")(tokens))
         distance = jnp.linalg.norm(tokens[..., self.position], axis=-1)
         penalty = jax.nn.softplus(self.param("near", lambda _: jnp.log(jnp.expm1(jnp.float32(self.near)))))
         # What an object is may move the attention by at most `preference` against its distance: learned on
