@@ -265,6 +265,15 @@ def sweep_ratios(sweep_rows: list[dict], line: str, reference: str) -> list[floa
             for k, rates in sorted(means[reference].items())]
 
 
+def attention_text(line: str) -> str:
+    """eval.py --attention's line ("... per seed: 200 1.00 of 90, ...; all 0.98") in a few words."""
+    per_seed, _, overall = line.partition("; all ")
+    cells = [cell.split() for cell in per_seed.split(": ", 1)[1].split(", ")]  # [seed, fraction, "of", count]
+    lowest = min(cells, key=lambda cell: float(cell[1]))
+    return (f"at {sum(int(c[3]) for c in cells):,} bridge decisions the most attended object was the fix's in "
+            f"{overall} of them; the lowest seed, {lowest[0]}: {lowest[1]} of {lowest[3]}")
+
+
 def selection(env: str) -> str:
     """RESULTS.md's table of the learned object selector beside ours on `env`'s test seeds (bench.selection's
     records): test solve rates, what it looks at, its cost, and each bar of issue 37 measured."""
@@ -290,7 +299,8 @@ def selection(env: str) -> str:
               f"* A cycle of the learned selection costs {elapsed['ours_learned_selection'] / elapsed['ours']:.1f}x "
               f"ours' (the bar: 3x at most); the run's peak memory (both trainings, one after the other): "
               f"{run['steps']['train']['peak_rss_mib']:,.0f} MiB.",
-              f"* What it looks at (test tasks, greedy; `{run['steps']['attention']['command']}`): {run['attention']}.",
+              f"* What it looks at (test tasks, greedy; `{run['steps']['attention']['command']}`): "
+              f"{attention_text(run['attention'])}.",
               "", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit {run['commit'][:10]}.",
               "", f"![{ENV_TITLES[env]}, learned selection](results/{env}/selection.png)", "",
               novelty_table(env, sweep_rows, run["seeds"], run["steps"]["sweep"]["command"])]
