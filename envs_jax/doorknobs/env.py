@@ -173,13 +173,8 @@ class Doorknobs(NoveltyEnv):
     def full_state_fits(self) -> bool:
         return self.map_size <= TEST_MAP_SIZE
 
-    @property
-    def _rooms(self) -> int:
-        return self.map_size ** 2
-
-    @property
-    def _layout(self) -> tuple[np.ndarray, np.ndarray]:
-        return maps.layout(self.map_size)  # door_rooms int32[D, 2], room_doors int32[R, 4]
+    _rooms = property(lambda self: self.map_size ** 2)
+    _layout = property(lambda self: maps.layout(self.map_size))  # door_rooms int32[D, 2], room_doors int32[R, 4]
 
     # ---- host: task arrays and the planner's problem ---------------------------------------------
     def task_arrays(self, spec: DoorknobsTask) -> Task:
@@ -281,16 +276,13 @@ class Doorknobs(NoveltyEnv):
     def state_vector(self, state: State) -> jax.Array:
         return jnp.concatenate([state.robot, state.knob_rot, state.door_open.astype(jnp.float32)])
 
-    def oracle_object(self, state: State) -> jax.Array:
-        """The door of the knob `features` shows: the nearest of the robot's room's doors."""
+    def oracle_object(self, state: State) -> jax.Array:  # the door of the knob `features` shows
         doors, candidates, _, _, k = self._room_knobs(state)
         return jnp.where(jnp.any(candidates), 1 + self._rooms + doors[k], -1).astype(jnp.int32)
 
     def _room_knobs(self, state: State):
-        """The robot's room's 4 door slots (doors, which are candidates), |dx| and |dy| from the robot to
-        each knob's anchor corner, and k: the nearest candidate's place among them."""
-        task = state.task
-        room, in_any = self.robot_room(state)
+        """The robot's room's 4 doors, which are candidates, |dx| and |dy| to each knob, and k: the nearest."""
+        task, (room, in_any) = state.task, self.robot_room(state)
         # The room's 4 door slots in ascending order (top < bottom < left < right), so that ties go to the
         # lowest slot, as in an argmin over every door of the map.
         slots = jnp.asarray(self._layout[1][:, [TOP, BOTTOM, LEFT, RIGHT]])[room]
@@ -322,20 +314,16 @@ class Doorknobs(NoveltyEnv):
                           state.door_open[door].astype(jnp.float32)])
         return jnp.concatenate([jnp.where(jnp.any(candidates), knob, 0.0), moved])
 
-    # The paper's objects (envs.md §3): the robot, the rooms and the doors, a door with its knob (what
-    # OpenDoor turns), placed at the knob's anchor corner, as the selection measures it.
+    # The paper's objects (envs.md §3): the robot, the rooms and the doors, each door at its knob's corner.
     object_types = {"robot": (), "room": (), "door": ("rot", "target_rot", "open")}
-
-    @property
-    def num_objects(self) -> int:
-        return 1 + 3 * self.map_size ** 2  # the robot, R rooms, 2R door slots
+    num_objects = property(lambda self: 1 + 3 * self._rooms)  # the robot, R rooms, 2R door slots
 
     def objects(self, state: State) -> Objects:
-        task, width = state.task, self.object_width
+        task, group = state.task, lambda *args: Objects.of_type(*args, self.object_width)
         doors = jnp.stack([state.knob_rot, task.knob_target, state.door_open.astype(jnp.float32)], axis=-1)
-        return Objects.concat(Objects.of_type(0, jnp.zeros((1, 0)), True, False, state.robot[None], width),
-                              Objects.of_type(1, jnp.zeros((self._rooms, 0)), task.room_mask, False, task.room_xy, width),
-                              Objects.of_type(2, doors, task.door_mask, True, task.door_rect[:, :2], width))
+        return Objects.concat(group(0, jnp.zeros((1, 0)), True, False, state.robot[None]),
+                              group(1, jnp.zeros((self._rooms, 0)), task.room_mask, False, task.room_xy),
+                              group(2, doors, task.door_mask, True, task.door_rect[:, :2]))
 
     @property
     def full_state_varying(self) -> np.ndarray:
