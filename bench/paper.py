@@ -64,6 +64,16 @@ def results_rows(experiment: Path, renamed: dict[str, str] | None = None) -> lis
     return rows
 
 
+def write_run_records(run: Path, records: Path, name: str) -> None:
+    """An experiment's table (results.csv's rows), figure and generalisation sweep (eval.py --sweep
+    novelties) as `name`.csv, `name`.png, `name`_sweep.csv and `name`_sweep.png in `records`."""
+    records.mkdir(parents=True, exist_ok=True)
+    (records / f"{name}.csv").write_text(csv_text(results_rows(run)))
+    shutil.copy(run / "curves.png", records / f"{name}.png")
+    for suffix in ("csv", "png"):
+        shutil.copy(run / f"sweep_novelties.{suffix}", records / f"{name}_sweep.{suffix}")
+
+
 def csv_text(rows: list[dict]) -> str:
     out = io.StringIO()
     writer = csv.DictWriter(out, fieldnames=list(rows[0]), lineterminator="\n")

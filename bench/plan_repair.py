@@ -15,11 +15,10 @@ run again (E-steps.json in the runs directory), and training resumes from its ch
 """
 from __future__ import annotations
 
-import shutil
 import sys
 import time
 
-from bench.paper import Steps, command_line, csv_text, results_rows, test_seed_args, train_step, write_record
+from bench.paper import Steps, command_line, test_seed_args, train_step, write_record, write_run_records
 from bench.records import ENVS, TEST_SEEDS, git_commit, machine, run_child, shown
 from envs_jax import VARIANTS
 from jaxbridge.run.comparison import run_labels, write_comparison
@@ -44,11 +43,7 @@ def main(argv=None) -> int:
     write_comparison(run, env, run_labels(approaches))
 
     out = args.records / env
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "plan_repair.csv").write_text(csv_text(results_rows(run)))
-    shutil.copy(run / "sweep_novelties.csv", out / "plan_repair_sweep.csv")
-    shutil.copy(run / "sweep_novelties.png", out / "plan_repair_sweep.png")
-    shutil.copy(run / "curves.png", out / "plan_repair.png")
+    write_run_records(run, out, "plan_repair")
     record = {"env": env, "commit": git_commit(), "command": command_line("bench.plan_repair", args),
               "seeds": f"{first}-{first + count - 1}", "approaches": approaches,
               "steps": {"train": train, "sweep": sweep},

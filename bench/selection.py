@@ -18,11 +18,10 @@ runs directory), and training resumes from its checkpoints.
 from __future__ import annotations
 
 import json
-import shutil
 import sys
 import time
 
-from bench.paper import Steps, command_line, csv_text, results_rows, test_seed_args, train_step, write_record
+from bench.paper import Steps, command_line, test_seed_args, train_step, write_record, write_run_records
 from bench.records import ENVS, TEST_SEEDS, git_commit, machine, run_child, shown
 from jaxbridge.run.comparison import run_labels, write_comparison
 
@@ -45,11 +44,7 @@ def main(argv=None) -> int:
     write_comparison(run, env, run_labels(list(APPROACHES)))
 
     out = args.records / env
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "selection.csv").write_text(csv_text(results_rows(run)))
-    shutil.copy(run / "sweep_novelties.csv", out / "selection_sweep.csv")
-    shutil.copy(run / "sweep_novelties.png", out / "selection_sweep.png")
-    shutil.copy(run / "curves.png", out / "selection.png")
+    write_run_records(run, out, "selection")
     elapsed = {name: json.loads((run / name / "summary.json").read_text())["elapsed_s"] for name in APPROACHES}
     record = {"env": env, "commit": git_commit(), "command": command_line("bench.selection", args),
               "seeds": f"{first}-{first + count - 1}", "cycles": args.cycles, "approaches": list(APPROACHES),
