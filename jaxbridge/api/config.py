@@ -9,7 +9,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import preset_values
 from jaxbridge.learn.approaches import BridgeKind, get_approach
 from jaxbridge.learn.setup import make_setup
-from jaxbridge.utils.errors import InputError
+from jaxbridge.utils.errors import InputError, refusing
 
 
 def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = None, cycles: int | None = None,
@@ -32,28 +32,22 @@ def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = 
         given["cycles"] = cycles
     env = TrainConfig.env if env is None else env
     env_cls = load_env(env)
-    try:
+    with refusing():  # a value out of its range, e.g. a negative bonus
         config = TrainConfig(env=env_name(env), **{**preset_values(given.pop("preset", TrainConfig.preset), env_cls),
                                                    **given})
-    except ValueError as err:  # a value out of its range, e.g. a negative bonus
-        raise InputError(str(err)) from None
     _check_fits_env(config, env_cls)
     return config
 
 
 def _check_fits_env(config: TrainConfig, env_cls) -> None:
     """Refuse a config the env cannot train with (see make_config)."""
-    try:
+    with refusing("env_quirks"):
         env_cls.check_quirks(config.env_quirks)
-    except ValueError as err:
-        raise InputError(f"{{setting}}: {err}", "env_quirks") from None
     if config.test_protocol not in env_cls.test_protocols:
         raise InputError(f"{{setting}} {config.test_protocol!r}: {env_cls.name} has "
                          f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}", "test_protocol")
-    try:
+    with refusing("episodes_per_cycle"):
         config.check_buffer_fits()
-    except ValueError as err:
-        raise InputError(f"{{setting}}: {err}", "episodes_per_cycle") from None
     _check_learner(config, env_cls)
     if config.seed_block > config.num_seeds:
         raise InputError(f"{{setting}} {config.seed_block} is larger than the {config.num_seeds} seeds", "seed_block")
@@ -64,11 +58,9 @@ def _check_learner(config: TrainConfig, env_cls) -> None:
     contract (learn/learner.check_learner: shapes only, nothing is computed)."""
     from jaxbridge.learn.learner import LearnerContractError, check_learner
     from jaxbridge.learn.learners import registered
-    try:  # making the setup resolves the learner by name (learners.learner_factory) and makes it
+    with refusing("learner", (ValueError, LearnerContractError)):  # the setup resolves the learner by name, makes it
         learning = get_approach(config.approach).bridge is BridgeKind.Q  # else ours': what the learner would fit
         learner = make_setup(dataclasses.replace(config, approach=config.approach if learning else "ours", num_seeds=1),
                              env_cls).learner  # one seed's tasks
         if config.learner not in registered():
             check_learner(learner, config)
-    except (ValueError, LearnerContractError) as err:
-        raise InputError(f"{{setting}}: {err}", "learner") from None

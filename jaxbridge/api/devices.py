@@ -1,7 +1,7 @@
 """The devices a training shards its seeds over."""
 from __future__ import annotations
 
-from jaxbridge.utils.errors import InputError
+from jaxbridge.utils.errors import refusing
 
 
 def local_devices(count: int | None = None) -> list:
@@ -10,7 +10,5 @@ def local_devices(count: int | None = None) -> list:
     exist). Call it before anything runs JAX for the CPU count to take effect."""
     from jaxbridge.learn.devices import select_devices
 
-    try:
+    with refusing():
         return select_devices(count)
-    except ValueError as err:
-        raise InputError(str(err)) from None

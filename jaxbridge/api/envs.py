@@ -10,7 +10,7 @@ import numpy as np
 from envs_jax import NoveltyEnv, env_class, is_builtin, registered
 from jaxbridge.core.check_env import EnvContractError, check_env
 from jaxbridge.run.evaluate import sized_specs_per_seed
-from jaxbridge.utils.errors import InputError
+from jaxbridge.utils.errors import InputError, refusing
 
 EnvLike = str | type[NoveltyEnv]
 
@@ -28,10 +28,8 @@ def load_env(env: EnvLike) -> type[NoveltyEnv]:
         return env if is_builtin(name) else _checked(env, name)
     if os.getcwd() not in sys.path and "" not in sys.path:
         sys.path.insert(0, os.getcwd())  # `examples.locked_box:LockedBox` from the working directory
-    try:
+    with refusing():
         env_cls = env_class(env)
-    except ValueError as err:
-        raise InputError(str(err)) from None
     return env_cls if is_builtin(env) else _checked(env_cls, env)
 
 
@@ -79,10 +77,8 @@ def sized_tasks(env_cls: type[NoveltyEnv], size: dict[str, int]):
         raise InputError(f"{{setting}}: {env_cls.name} takes "
                          f"{', '.join(f'{k} ({v})' for k, v in env_cls.task_sizes.items())}; not {', '.join(unknown)}",
                          "task_size")
-    try:
+    with refusing("task_size", (ValueError, TypeError)):
         env_cls.sized_task(np.random.default_rng(0), **size)  # refuse bad sizes before anything is built
-    except (ValueError, TypeError) as err:
-        raise InputError(f"{{setting}}: {err}", "task_size") from None
     return lambda rng: env_cls.sized_task(rng, **size)
 
 

@@ -13,7 +13,7 @@ from jaxbridge.core.episode import Controls
 from jaxbridge.core.presets import default_test_protocol
 from jaxbridge.core.tasks import TaskBatch
 from jaxbridge.run.evaluate import format_comparison, format_table, run_bridge, summarise
-from jaxbridge.utils.errors import InputError
+from jaxbridge.utils.errors import InputError, refusing
 from jaxbridge.utils.files import write_atomic
 
 
@@ -93,10 +93,8 @@ class Bridges:
         if episode is not None and not 0 <= episode < batch.size:
             raise InputError(f"{{setting}} must be below {batch.size}, the number of evaluated tasks, got {episode}",
                              "render_task")
-        try:
+        with refusing():
             drawer = drawer_for(batch.env)
-        except ValueError as err:
-            raise InputError(str(err)) from None
         chosen = [episode] if episode is not None else np.flatnonzero(batch.seeds == batch.seeds[0])
         bridge, params, controls = self.on(batch)
         traces = trace_episodes(batch, bridge, params, chosen, rollout_seed, controls, expected=episodes.result)
@@ -120,10 +118,8 @@ class Policy(Bridges):
         from jaxbridge.run.evaluate import load_policy
 
         self.run_dir = Path(run_dir)
-        try:
+        with refusing():  # a config that does not load; CheckpointError is an InputError already
             self.trained = load_policy(self.run_dir)
-        except ValueError as err:  # a config that does not load; CheckpointError is an InputError already
-            raise InputError(str(err)) from None
         self.label = f"greedy bridge of {self.config.approach}, cycle {self.cycle}"
 
     @property
@@ -153,10 +149,8 @@ class Policy(Bridges):
         (`NoveltyEnv.oracle_object`). An `Attention` (run/attention.py); InputError for another approach."""
         from jaxbridge.run.attention import attention_agreement
 
-        try:
+        with refusing("attention"):
             return attention_agreement(self.trained, episodes.batch, rollout_seed)
-        except ValueError as err:
-            raise InputError(f"{{setting}}: {err}", "attention") from None
 
     def render(self, path: str | Path, episode: int = 0, rollout_seed: int = 0, **which_tasks) -> Path:
         """Draw episode `episode` of `evaluate(**which_tasks)` to a PNG at `path`, as eval.py --render."""
@@ -173,12 +167,8 @@ class Policy(Bridges):
         sized = None if task_size is None else sized_tasks(self.trained.env_cls, task_size)
         seeds = None if seeds is None else [int(s) for s in seeds]
         limit = None if max_memory is None else int(max_memory * 2**30)
-        try:
+        with refusing():
             return policy_tasks(self.trained, sized, num_tasks, limit, seeds=seeds, specs=tasks)
-        except InputError:
-            raise
-        except ValueError as err:
-            raise InputError(str(err)) from None
 
 
 def load(run_dir: str | Path, approach: str | None = None) -> Policy:
@@ -225,10 +215,8 @@ class HandMade(Bridges):
     def on(self, batch: TaskBatch):
         from jaxbridge.core.bridges import make_bridge
 
-        try:
+        with refusing():  # an env without an oracle
             return make_bridge(self.bridge, batch.env), None, Controls()
-        except ValueError as err:  # an env without an oracle
-            raise InputError(str(err)) from None
 
     def tasks(self, seeds: int | Sequence[int] = 8, num_tasks: int = 10, max_memory: float | None = None) -> TaskBatch:
         """Each seed's test tasks of the protocol, with their plan tables (refused with InputError if they
@@ -237,12 +225,8 @@ class HandMade(Bridges):
         from jaxbridge.run.memory import check_evaluation
         from jaxbridge.utils.progress import SlowWork
 
-        try:
+        with refusing():  # a protocol the env lacks
             specs, owners = evaluation_specs(self.env_cls, seed_list(seeds), num_tasks, self.protocol)
-        except InputError:
-            raise
-        except ValueError as err:  # a protocol the env lacks
-            raise InputError(str(err)) from None
         check_evaluation(self.env_cls, specs, None if max_memory is None else int(max_memory * 2**30))
         batch = make_batch(self.env_cls, specs, owners, progress=SlowWork(f"{self.env_cls.name}: test tasks and plan tables"))
         self.on(batch)  # refuse a bridge the env lacks before any rollout

@@ -11,7 +11,7 @@ from jaxbridge.api.policies import Policy, run_directory, runs_in
 from jaxbridge.learn.approaches import KNOWN
 from jaxbridge.run.comparison import run_labels
 from jaxbridge.run.sweep import SweepResult, evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
-from jaxbridge.utils.errors import InputError
+from jaxbridge.utils.errors import InputError, refusing
 from jaxbridge.utils.files import write_atomic
 
 SWEEP_TASKS = 10  # tasks per count, met by every seed
@@ -71,11 +71,7 @@ def sweep_novelties(lines: Mapping[str, str | Path | Policy], tasks_per_count: i
     novelty instances (`env.novelty_sweep`), `tasks_per_count` tasks drawn from `sweep_seed`, the same for
     every seed and line. `progress(label)` is called as each line starts."""
     policies = {label: p if isinstance(p, Policy) else Policy(p) for label, p in lines.items()}
-    try:
+    with refusing():  # runs of several envs, an env without a sweep
         result = evaluate_sweep({label: p.trained for label, p in policies.items()}, tasks_per_count, sweep_seed,
                                 rollout_seed, progress=progress)
-    except InputError:
-        raise
-    except ValueError as err:  # runs of several envs, an env without a sweep
-        raise InputError(str(err)) from None
     return NoveltySweep(result, ", ".join(sorted({f"cycle {p.cycle}" for p in policies.values()})))

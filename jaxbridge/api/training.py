@@ -22,7 +22,7 @@ from jaxbridge.learn.online import TrainOutput
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import rundir
 from jaxbridge.utils.distributed import is_primary
-from jaxbridge.utils.errors import InputError
+from jaxbridge.utils.errors import InputError, refusing
 from jaxbridge.utils.stats import cell_text
 
 
@@ -188,7 +188,7 @@ def prepare_resume(run_dir: str | Path, workers: int | None = None, devices: lis
     from jaxbridge.run.runner import train as train_run
 
     run_dir = Path(run_dir)
-    try:
+    with refusing():
         if is_experiment_dir(run_dir):
             config, approaches, hyper_grid = load_experiment(run_dir)
             load_env(config.env)
@@ -200,10 +200,6 @@ def prepare_resume(run_dir: str | Path, workers: int | None = None, devices: lis
             setup = make_setup(config, load_env(config.env))
             work = lambda **events: {config.approach: train_run(setup, run_dir, progress, resume=True, devices=devices,
                                                                 tensorboard=tensorboard, **events)}
-    except InputError:
-        raise
-    except ValueError as err:
-        raise InputError(str(err)) from None
     lock = rundir.RunLock(run_dir).acquire() if is_primary() else None
     return Training(config, approaches or [config.approach], run_dir, work, lock)
 
@@ -251,11 +247,9 @@ def _approach_list(approaches: str | Sequence[str], config: TrainConfig, env_cls
 
     names = [approaches] if isinstance(approaches, str) else list(approaches)
     for approach in names:
-        try:
+        with refusing("approaches"):
             get_approach(approach)
             q_network(dataclasses.replace(config, approach=approach), env_cls())
-        except ValueError as err:
-            raise InputError(f"{{setting}}: {err}", "approaches") from None
     if not names or len(set(names)) != len(names):
         raise InputError(f"approaches: one or more names, none twice; got {names}")
     return names
@@ -266,10 +260,8 @@ def _sweep_grid(sweep: Mapping[str, Sequence] | Sequence[str] | None) -> dict[st
     as train.py checks them."""
     texts = list(sweep or []) if not isinstance(sweep, Mapping) else [
         f"{key}={','.join(_sweep_text(v) for v in values)}" for key, values in sweep.items()]
-    try:
+    with refusing():
         return grid.parse_sweeps(texts)
-    except ValueError as err:
-        raise InputError(str(err)) from None
 
 
 def _sweep_text(value) -> str:

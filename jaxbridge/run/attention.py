@@ -8,10 +8,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import TaskBatch
 from jaxbridge.learn.object_q import ObjectQNetwork, attention
-from jaxbridge.run.evaluate import TrainedPolicy
+from jaxbridge.run.evaluate import TrainedPolicy, batch_rollout
 
 
 @dataclass(frozen=True)
@@ -36,9 +35,7 @@ def attention_agreement(policy: TrainedPolicy, batch: TaskBatch, rollout_seed: i
     if not isinstance(net, ObjectQNetwork):
         raise ValueError(f"approach {policy.config.approach} selects no object by attention (ours_learned_selection does)")
     bridge, greedy, controls = policy.on(batch)
-    keys = jax.random.split(jax.random.key(rollout_seed), batch.size)
-    _, records = rollout(batch.env, bridge, greedy, batch.arrays, keys, batch.max_steps, record=True, controls=controls,
-                         groups=jnp.asarray(batch.seeds, jnp.int32))
+    _, records = batch_rollout(batch, bridge, greedy, rollout_seed, controls, record=True)  # evaluate's episodes
     oracle = np.asarray(jax.vmap(jax.vmap(batch.env.oracle_object))(records.env_state))  # [T, B]
     looked = np.asarray(jax.vmap(lambda q, f: jnp.argmax(attention(net, q, f), -1), in_axes=(0, 1), out_axes=1)(
         greedy.q, records.features))  # [T, B]: each episode's own network

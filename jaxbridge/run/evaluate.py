@@ -34,12 +34,18 @@ class SeedSummary:
     task_size: str  # e.g. "11 cells, 3 doors"; "N different tasks" when the seed's tasks differ
 
 
+def batch_rollout(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0,
+                  controls: Controls = Controls(), record: bool = False):
+    """`rollout` of every task in the batch (bridge_params: None or batched over tasks), each episode's key
+    drawn from `seed` as every evaluation draws it; (EpisodeResult, StepRecord or None)."""
+    return rollout(batch.env, bridge, bridge_params, batch.arrays, jax.random.split(jax.random.key(seed), batch.size),
+                   batch.max_steps, record=record, controls=controls, groups=jnp.asarray(batch.seeds, jnp.int32))
+
+
 def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0,
                controls: Controls = Controls()) -> EpisodeResult:
-    """One rollout of every task in the batch (bridge_params: None or batched over tasks)."""
-    result, _ = rollout(batch.env, bridge, bridge_params, batch.arrays, jax.random.split(jax.random.key(seed), batch.size),
-                        batch.max_steps, controls=controls, groups=jnp.asarray(batch.seeds, jnp.int32))
-    return jax.tree.map(np.asarray, result)
+    """One rollout of every task in the batch, its results on the host."""
+    return jax.tree.map(np.asarray, batch_rollout(batch, bridge, bridge_params, seed, controls)[0])
 
 
 def summarise(batch: TaskBatch, result: EpisodeResult) -> list[SeedSummary]:
