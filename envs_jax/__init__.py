@@ -6,15 +6,16 @@ types, `register` and `env_class` (names, envs_jax/registry.py), `envs_jax.drawi
 """
 from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, BridgeAction, BridgeObs, NoveltyEnv,
                            NoveltySweep, Objects, SkillCall, SkillSpec, TaskSpec)
-from envs_jax.coffee import Coffee
+from envs_jax.coffee import Coffee, CoffeeDistractor
 from envs_jax.doorknobs import Doorknobs
 from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchPanel
 from envs_jax.registry import BUILTIN, VARIANTS, env_class, is_builtin, register, registered
 
-for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel):
+for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel, CoffeeDistractor):
     register(_cls.name, _cls)
 assert registered() == sorted(BUILTIN + VARIANTS)
 
 __all__ = ["BUILTIN", "VARIANTS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
            "NoveltySweep", "Objects", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee", "LightSwitchPanel",
+           "CoffeeDistractor",
            "env_class", "is_builtin", "register", "registered"]

@@ -274,6 +274,13 @@ class NoveltyEnv(abc.ABC):
         A feature says what an object is (a key's turn, a cup's liquid); where it is, is its position."""
         raise NotImplementedError(f"{type(self).__name__} has no object view (object_types, objects)")
 
+    @property
+    def candidate_slots(self) -> np.ndarray:
+        """int[C]: the slots that can ever be interactable, ascending (static: the learned selector's
+        tokens are the robot's and these; `check_env` checks no other slot is ever interactable).
+        Default: every slot but the robot's."""
+        return np.arange(1, self.num_objects)
+
     def oracle_object(self, state: Any) -> jax.Array:
         """int32[]: the slot of the object the novelty's fix acts on in this state (the oracle's), -1 if
         none; what a learned selector's attention is measured against (eval.py --attention)."""

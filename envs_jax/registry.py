@@ -60,4 +60,4 @@ def is_builtin(spec: str) -> bool:
 
 
 BUILTIN = ("light_switch_door", "doorknobs", "coffee")  # the paper's envs
-VARIANTS = ("light_switch_panel",)  # ours, built to test one argument (docs/DESIGN.md says which)
+VARIANTS = ("light_switch_panel", "coffee_distractor")  # ours, built to test one argument (docs/DESIGN.md says which)

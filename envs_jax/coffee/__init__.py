@@ -1,4 +1,5 @@
 """Coffee: fill cups from a jug whose handle is rotated away from the robot (reference/envs.md §4)."""
+from envs_jax.coffee.distractor import CoffeeDistractor
 from envs_jax.coffee.env import Coffee
 
-__all__ = ["Coffee"]
+__all__ = ["Coffee", "CoffeeDistractor"]

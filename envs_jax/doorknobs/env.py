@@ -317,6 +317,7 @@ class Doorknobs(NoveltyEnv):
     # The paper's objects (envs.md §3): the robot, the rooms and the doors, each door at its knob's corner.
     object_types = {"robot": (), "room": (), "door": ("rot", "target_rot", "open")}
     num_objects = property(lambda self: 1 + 3 * self._rooms)  # the robot, R rooms, 2R door slots
+    candidate_slots = property(lambda self: 1 + self._rooms + np.arange(2 * self._rooms))  # the doors
 
     def objects(self, state: State) -> Objects:
         task, group = state.task, lambda *args: Objects.of_type(*args, self.object_width)

@@ -347,6 +347,8 @@ class LightSwitchDoor(NoveltyEnv):
     def num_objects(self) -> int:
         return 2 + self.max_cells + self.max_doors
 
+    candidate_slots = property(lambda self: np.r_[1, 2 + self.max_cells + np.arange(self.max_doors)])  # light, doors
+
     def objects(self, state: State) -> Objects:
         task, width, at = state.task, self.object_width, lambda x: jnp.asarray(x, jnp.float32).reshape(-1, 1)
         light_x, nothing = task.num_cells.astype(jnp.float32) - 0.5, lambda n: jnp.zeros((n, 0))

@@ -204,6 +204,12 @@ def _check_objects(env: NoveltyEnv, states: Any) -> None:
     beyond = np.arange(width) >= own[..., None]
     _expect(not values.features[beyond].any(), f"{where}.features", "zeros beyond each type's own features",
             "values in the padding")
+    candidates = np.asarray(env.candidate_slots)
+    _expect(candidates.ndim == 1 and (np.diff(candidates) > 0).all() and ((candidates >= 1) & (candidates < n)).all(),
+            f"{type(env).__name__}.candidate_slots", f"ascending slots in 1..{n - 1}", candidates)
+    never = np.setdiff1d(np.arange(n), candidates)
+    _expect(not values.interactable[:, never].any(), where, "no slot outside candidate_slots interactable",
+            f"slots {np.unique(np.nonzero(values.interactable[:, never])[1] if never.size else [])} of those")
     one = jax.tree.map(lambda x: x[0], states)
     _same(where, jax.jit(env.objects)(one), jax.tree.map(lambda x: x[0], objects))
     acted_on = np.asarray(_shape(f"{type(env).__name__}.oracle_object", _calls(

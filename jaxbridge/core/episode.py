@@ -7,9 +7,10 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from flax import struct
 
-from envs_jax.base import POSITION_DIM, NoveltyEnv, SkillCall
+from envs_jax.base import POSITION_DIM, NoveltyEnv, Objects, SkillCall
 
 PLANNER, BRIDGE = 0, 1  # who is in control of an episode
 
@@ -34,6 +35,9 @@ class Controls:
     # The learned object selector (issue 37): the bridge sees every object of the state as a token and
     # learns which matters; nothing says which object was closest where it got stuck.
     objects: bool = False
+    # The paper's selection rule read off the object view (`closest_object_features`), in place of the
+    # env's own `features`.
+    closest_object: bool = False
 
 
 def token_width(env: NoveltyEnv) -> int:
@@ -41,28 +45,66 @@ def token_width(env: NoveltyEnv) -> int:
     return len(env.object_types) + env.object_width + POSITION_DIM + 1
 
 
+def relative_to_robot(position: jax.Array, robot: jax.Array) -> jax.Array:
+    """Offsets from the robot squashed to (-1, 1) per axis, d / (1 + |d|): exact near the robot, bounded
+    far away, so a larger test task's distances are not beyond the training task's."""
+    offset = position - robot
+    return offset / (1.0 + jnp.abs(offset))
+
+
+def closest_object(objects: Objects) -> tuple[jax.Array, jax.Array]:
+    """The paper's feature selection: the slot of the interactable object closest to the robot (ties: the
+    lowest slot), and whether there is one."""
+    distance = jnp.linalg.norm(objects.position - objects.position[0], axis=-1)
+    return jnp.argmin(jnp.where(objects.interactable, distance, jnp.inf)), jnp.any(objects.interactable)
+
+
+def closest_object_width(env: NoveltyEnv) -> int:
+    return 1 + env.object_width + 2 * POSITION_DIM
+
+
+def closest_object_features(env: NoveltyEnv, state: Any, stuck_state: Any) -> jax.Array:
+    """float32[1 + W + 6]: the paper's selection as one function of the object view. The object is chosen
+    in the stuck state and read in this one: a flag that there is one, its features and its position
+    relative to the robot (zeros without one), then how far the robot has moved since it got stuck."""
+    slot, found = closest_object(env.objects(stuck_state))
+    now, robot_then = env.objects(state), env.objects(stuck_state).position[0]
+    chosen = jnp.concatenate([now.features[slot], relative_to_robot(now.position[slot], now.position[0])])
+    moved = relative_to_robot(now.position[0], robot_then)
+    return jnp.concatenate([found[None].astype(jnp.float32), jnp.where(found, chosen, 0.0), moved])
+
+
+def token_slots(env: NoveltyEnv) -> np.ndarray:
+    """The slots that become tokens: the robot's and every one a skill may act on (the paper's candidates
+    for its selection); cells, rooms and the like only cost attention."""
+    return np.r_[0, env.candidate_slots]
+
+
 def object_tokens(env: NoveltyEnv, state: Any) -> jax.Array:
-    """float32[N * token_width]: the object view as tokens, slot 0 the robot; a masked-out slot is zeros.
-    Positions relative to the robot are squashed to (-1, 1) per axis, d / (1 + |d|): exact near the
-    robot, bounded far away, so a larger test task's distances are not beyond the training task's."""
-    objects = env.objects(state)
+    """float32[T * token_width]: the object view's `token_slots` as tokens, the robot first; a masked-out
+    slot is zeros. Positions are `relative_to_robot`."""
+    objects = jax.tree.map(lambda x: x[token_slots(env)], env.objects(state))
     kind = jax.nn.one_hot(objects.type_id, len(env.object_types)) * objects.mask[:, None]
-    offset = objects.position - objects.position[0]
-    relative = offset / (1.0 + jnp.abs(offset)) * objects.mask[:, None]
+    relative = relative_to_robot(objects.position, objects.position[0]) * objects.mask[:, None]
     tokens = jnp.concatenate([kind, objects.features, relative, objects.interactable[:, None].astype(jnp.float32)], -1)
     return tokens.reshape(-1)
 
 
 def observation_size(env: NoveltyEnv, controls: Controls) -> int:
     if controls.objects:
-        return env.num_objects * token_width(env)
+        return len(token_slots(env)) * token_width(env)
+    if controls.closest_object:
+        return closest_object_width(env)
     return env.full_state_size if controls.full_state else env.num_features
 
 
 def observation(env: NoveltyEnv, controls: Controls, state: Any, stuck_state: Any) -> jax.Array:
-    """What the bridge sees: the env's object-centric features, the full padded state, or the object tokens."""
+    """What the bridge sees: the env's object-centric features, the closest object's by the paper's rule,
+    the full padded state, or the object tokens."""
     if controls.objects:
         return object_tokens(env, state)
+    if controls.closest_object:
+        return closest_object_features(env, state, stuck_state)
     return env.full_state(state) if controls.full_state else env.features(state, stuck_state)
 
 

@@ -99,8 +99,12 @@ PLAN_REPAIR = {a.name: a for a in (
 )}
 
 # The paper's first open question (issue 37): a bridge that learns which object matters instead of
-# being shown the closest one's features (learn/object_q.py). Not among "all".
+# being shown the closest one's features (learn/object_q.py), and the paper's rule as one function of
+# the object view, the same for every env, to compare it with. Not among "all".
 SELECTION = {a.name: a for a in (
+    Approach("ours_closest_object", "ours, closest object", BridgeKind.Q, Controls(closest_object=True),
+             "ours with the paper's selection read off the object view: the interactable object closest to the "
+             "robot where it got stuck"),
     Approach("ours_learned_selection", "ours, learned selection", BridgeKind.Q, Controls(objects=True),
              "ours with every object of the state as a token, attention choosing which matters; no hand-made selection"),
 )}

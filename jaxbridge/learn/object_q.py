@@ -15,42 +15,41 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
-from jaxbridge.learn.q_bridge import ACTIVATIONS, SplitInput, UniformDense, mlp
+from jaxbridge.learn.q_bridge import SplitInput, UniformDense, mlp
 
 
 class ObjectAttention(nn.Module):
     """Tokens [..., N, D] (slot 0 the robot; then `position` entries of relative position; the last entry:
-    interactable) -> (context [..., 2E], weights [..., N]): the robot's embedding and the attention-weighted
-    sum of the interactable objects'. The logits are a bounded preference for what the object is, less
-    a learned penalty per unit of distance (starting at `near`): attention starts near the robot, as the
-    paper's rule, and learns how far to look and which kinds of object outweigh nearness."""
+    interactable) -> (attended [..., D], weights [..., N]): the attention-weighted mean of the interactable
+    objects' tokens, a soft version of the paper's one selected object. The logits are a bounded
+    preference for what the object is, less a learned penalty per unit of distance (starting at `near`):
+    attention starts near the robot, as the paper's rule, and learns how far to look and which kinds of
+    object outweigh nearness."""
 
-    embed: int
-    activation: str
+    keys: int  # the width of a token's key and the robot's query
     position: slice  # where a token's relative position lies
     near: float = 16.0
     preference: float = 4.0
 
     @nn.compact
     def __call__(self, tokens: jax.Array) -> tuple[jax.Array, jax.Array]:
-        # One layer per token for its key and its value: every stored transition's every object passes
-        # them at each update, so they are what the network costs; the MLP above adds the depth.
-        act = ACTIVATIONS[self.activation]
-        robot = act(UniformDense(self.embed, name="robot")(tokens[..., 0, :]))
-        query = UniformDense(self.embed, name="query")(robot)
-        keys, values = UniformDense(self.embed, name="key")(tokens), act(UniformDense(self.embed, name="value")(tokens))
+        # The only per-object layer is the key: every stored transition's every object passes it at each
+        # update, so it is what attention costs. The values are the tokens themselves; what the Q-network
+        # makes of the attended one is its first layer's work, as for ours' selected features.
+        query = UniformDense(self.keys, name="query")(tokens[..., 0, :])
+        keys = UniformDense(self.keys, name="key")(tokens)
         distance = jnp.linalg.norm(tokens[..., self.position], axis=-1)
         penalty = jax.nn.softplus(self.param("near", lambda _: jnp.log(jnp.expm1(jnp.float32(self.near)))))
         # What an object is may move the attention by at most `preference` against its distance: learned on
         # the few objects of a training task, an unbounded preference would override distance on the many of
         # a test task, where it was never tested.
-        content = jnp.einsum("...ne,...e->...n", keys, query) / jnp.sqrt(self.embed)
+        content = jnp.einsum("...nk,...k->...n", keys, query) / jnp.sqrt(self.keys)
         logits = self.preference * jnp.tanh(content / self.preference) - penalty * distance
         candidate = tokens[..., -1] > 0.5
         # A large finite floor, not -inf: with nothing to look at, the softmax and its gradient stay finite.
         weights = jax.nn.softmax(jnp.where(candidate, logits, -1e9), axis=-1)
         weights = jnp.where(candidate.any(-1, keepdims=True), weights, 0.0)  # none to look at: zeros
-        return jnp.concatenate([robot, jnp.einsum("...n,...ne->...e", weights, values)], -1), weights
+        return jnp.einsum("...n,...nd->...d", weights, tokens), weights
 
 
 class ObjectQMember(nn.Module):
@@ -65,7 +64,7 @@ class ObjectQMember(nn.Module):
     layer_norm: bool
 
     def encoder(self, **kwargs) -> ObjectAttention:
-        return ObjectAttention(self.hidden_sizes[0], self.activation, slice(*self.position), **kwargs)
+        return ObjectAttention(max(self.hidden_sizes[0] // 4, 1), slice(*self.position), **kwargs)
 
     def tokens(self, observation: jax.Array) -> jax.Array:
         return observation.reshape(observation.shape[:-1] + (-1, self.token_width))
@@ -74,9 +73,11 @@ class ObjectQMember(nn.Module):
     def __call__(self, carry: None, x: jax.Array | SplitInput) -> tuple[None, jax.Array]:
         observation, action = (x.observation, x.action) if isinstance(x, SplitInput) else (
             x[..., :-self.action_width], x[..., -self.action_width:])
-        context, _ = self.encoder(name="attention")(self.tokens(observation))
-        # The context's share of the first layer once per observation, however many candidate actions.
-        return carry, mlp(SplitInput(context, action), self.hidden_sizes, self.activation, self.output_init,
+        tokens = self.tokens(observation)
+        attended, _ = self.encoder(name="attention")(tokens)
+        # The robot's token and the attended one: the first layer's share of them once per observation,
+        # however many candidate actions.
+        return carry, mlp(SplitInput(jnp.concatenate([tokens[..., 0, :], attended], -1), action), self.hidden_sizes, self.activation, self.output_init,
                            self.layer_norm)
 
 

@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxbridge.core.episode import token_slots
 from jaxbridge.core.tasks import TaskBatch
 from jaxbridge.learn.object_q import ObjectQNetwork, attention
 from jaxbridge.run.evaluate import TrainedPolicy, batch_rollout
@@ -37,8 +38,8 @@ def attention_agreement(policy: TrainedPolicy, batch: TaskBatch, rollout_seed: i
     bridge, greedy, controls = policy.on(batch)
     _, records = batch_rollout(batch, bridge, greedy, rollout_seed, controls, record=True)  # evaluate's episodes
     oracle = np.asarray(jax.vmap(jax.vmap(batch.env.oracle_object))(records.env_state))  # [T, B]
-    looked = np.asarray(jax.vmap(lambda q, f: jnp.argmax(attention(net, q, f), -1), in_axes=(0, 1), out_axes=1)(
-        greedy.q, records.features))  # [T, B]: each episode's own network
+    looked = token_slots(batch.env)[np.asarray(jax.vmap(lambda q, f: jnp.argmax(attention(net, q, f), -1), in_axes=(0, 1), out_axes=1)(
+        greedy.q, records.features))]  # [T, B]: the slot each episode's own network looks at most
     counted = np.asarray(records.decided) & (oracle >= 0)
     seeds = list(dict.fromkeys(batch.seeds.tolist()))
     decisions = np.array([counted[:, batch.seeds == s].sum() for s in seeds])
