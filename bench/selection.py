@@ -1,19 +1,22 @@
-"""The learned object selector on one env's test seeds (issue 37): ours (the hand-made selection, the
-closest interactable object's features) beside ours_learned_selection (every object as a token, attention
-choosing), written as committed records.
+"""The learned object selector on one env's test seeds (issue 37): ours (the env's hand-made features),
+ours_closest_object (the paper's rule read off the object view) and ours_learned_selection (every object
+a token, attention choosing), written as committed records.
 
     python -m bench.selection --env light_switch_door   # -> docs/results/light_switch_door/selection*
+    python -m bench.selection --env coffee_distractor   # a cup nearer the stuck robot than the jug
 
 Steps, each as a user runs it (child processes; wall time and peak memory recorded):
-  1. train.py --env E --approaches ours,ours_learned_selection --workers 1 on the test seeds (one after the
-     other, so that each one's seconds per cycle are its own);
-  2. eval.py RUN --sweep novelties: both final bridges on more and more novelties;
-  3. eval.py RUN --approach ours_learned_selection --attention: how often its most attended object at a
+  1. python -m bench.training: seconds per cycle of ours and of the learned selector, 8 seeds x 20
+     cycles, one after the other in one process (their ratio is the cost bar's figure);
+  2. train.py --env E --approaches ... --workers 1 on the test seeds (one after the other); on a
+     distractor env (DISTRACTOR_ENVS) no_feature_selection too;
+  3. eval.py RUN --sweep novelties: the final bridges on more and more novelties;
+  4. eval.py RUN --approach ours_learned_selection --attention: how often its most attended object at a
      bridge decision is the one the env's fix acts on.
 It writes selection.csv, selection_sweep.csv, selection.png, selection_sweep.png and selection.json
-(commit, commands, times, peak memory, the attention line, machine) into docs/results/E/; `python -m
-bench.render` puts the tables into docs/RESULTS.md. A finished step is not run again (E-steps.json in the
-runs directory), and training resumes from its checkpoints.
+(commit, commands, times, peak memory, the cost line, the attention line, machine) into
+docs/results/E/; `python -m bench.render` puts the tables into docs/RESULTS.md. A finished step is not
+run again (E-steps.json in the runs directory), and training resumes from its checkpoints.
 """
 from __future__ import annotations
 
@@ -25,33 +28,49 @@ from bench.paper import Steps, command_line, test_seed_args, train_step, write_r
 from bench.records import ENVS, TEST_SEEDS, git_commit, machine, run_child, shown
 from jaxbridge.run.comparison import run_labels, write_comparison
 
-APPROACHES = ("ours", "ours_learned_selection")
+APPROACHES = ("ours", "ours_closest_object", "ours_learned_selection")
+DISTRACTOR_ENVS = ("coffee_distractor",)  # variants where an object nearer the stuck robot is the wrong one
+COST_SEEDS, COST_CYCLES = 8, 20
+
+
+def approaches(env: str) -> tuple[str, ...]:
+    return APPROACHES + (("no_feature_selection",) if env in DISTRACTOR_ENVS else ())
 
 
 def main(argv=None) -> int:
-    args = test_seed_args("bench.selection", __doc__, "the env to compare the selections on", argv, ENVS)
+    args = test_seed_args("bench.selection", __doc__, "the env to compare the selections on", argv,
+                          ENVS + DISTRACTOR_ENVS)
     first, count = TEST_SEEDS[0], args.num_seeds
     env, runs = args.env, args.runs.resolve()
     runs.mkdir(parents=True, exist_ok=True)
     steps, run = Steps(runs / f"{env}-steps.json"), runs / env
     start = time.perf_counter()
-    train = steps.run("train", lambda: train_step(run, ["--env", env, "--approaches", ",".join(APPROACHES), "--workers",
+    names = approaches(env)
+    cost = steps.run("cost", lambda: run_child(["python", "-m", "bench.training", "--env", env, "--num-seeds", str(COST_SEEDS),
+                                                "--cycles", str(COST_CYCLES), "--approach", "ours,ours_learned_selection"],
+                                               keep_stdout=True))
+    train = steps.run("train", lambda: train_step(run, ["--env", env, "--approaches", ",".join(names), "--workers",
                                                         "1", "--num-seeds", str(count), "--first-seed", str(first),
                                                         "--cycles", str(args.cycles)]))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
     attention = steps.run("attention", lambda: run_child(["python", "eval.py", shown(run), "--approach",
                                                           "ours_learned_selection", "--attention"], keep_stdout=True))
-    write_comparison(run, env, run_labels(list(APPROACHES)))
+    write_comparison(run, env, run_labels(list(names)))
 
     out = args.records / env
     write_run_records(run, out, "selection")
-    elapsed = {name: json.loads((run / name / "summary.json").read_text())["elapsed_s"] for name in APPROACHES}
+    elapsed = {name: json.loads((run / name / "summary.json").read_text())["elapsed_s"] for name in names}
     record = {"env": env, "commit": git_commit(), "command": command_line("bench.selection", args),
-              "seeds": f"{first}-{first + count - 1}", "cycles": args.cycles, "approaches": list(APPROACHES),
-              "elapsed_s": elapsed, "attention": attention["stdout"].strip().splitlines()[-1],
-              "steps": {"train": train, "sweep": sweep, "attention": {k: v for k, v in attention.items() if k != "stdout"}},
-              "wall_s": round(train["wall_s"] + sweep["wall_s"] + attention["wall_s"], 1), "machine": machine()}
+              "seeds": f"{first}-{first + count - 1}", "cycles": args.cycles, "approaches": list(names),
+              "elapsed_s": elapsed, "cost": cost["stdout"].strip().splitlines()[-1],
+              "attention": attention["stdout"].strip().splitlines()[-1],
+              "steps": {"cost": without_stdout(cost), "train": train, "sweep": sweep, "attention": without_stdout(attention)},
+              "wall_s": round(sum(step["wall_s"] for step in (cost, train, sweep, attention)), 1), "machine": machine()}
     return write_record(out / "selection.json", record, start)
+
+
+def without_stdout(step: dict) -> dict:
+    return {k: v for k, v in step.items() if k != "stdout"}
 
 
 if __name__ == "__main__":

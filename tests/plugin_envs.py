@@ -1,5 +1,6 @@
 """Envs that break the contract in one way each (tests/test_env_contract.py, also loaded by train.py)."""
 import jax.numpy as jnp
+import numpy as np
 
 from examples.locked_box import LockedBox
 
@@ -56,3 +57,9 @@ class LeakyObjects(LockedBox):
     def objects(self, state):
         objects = super().objects(state)
         return objects.replace(mask=objects.mask.at[2].set(False))
+
+
+class HiddenCandidate(LockedBox):
+    """The box can be acted on, but its slot is left out of candidate_slots (a learned selector's tokens)."""
+
+    candidate_slots = property(lambda self: np.array([1]))

@@ -209,7 +209,7 @@ def _check_objects(env: NoveltyEnv, states: Any) -> None:
             f"{type(env).__name__}.candidate_slots", f"ascending slots in 1..{n - 1}", candidates)
     never = np.setdiff1d(np.arange(n), candidates)
     _expect(not values.interactable[:, never].any(), where, "no slot outside candidate_slots interactable",
-            f"slots {np.unique(np.nonzero(values.interactable[:, never])[1] if never.size else [])} of those")
+            f"slots {np.unique(never[np.nonzero(values.interactable[:, never])[1]]).tolist()}")
     one = jax.tree.map(lambda x: x[0], states)
     _same(where, jax.jit(env.objects)(one), jax.tree.map(lambda x: x[0], objects))
     acted_on = np.asarray(_shape(f"{type(env).__name__}.oracle_object", _calls(
