@@ -8,8 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.records import ENVS, RECORDS
-from bench.selection import DISTRACTOR_ENVS
+from bench.records import DISTRACTOR_ENVS, ENVS, RECORDS
 from envs_jax import VARIANTS, env_class
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.utils import stats

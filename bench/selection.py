@@ -25,11 +25,10 @@ import sys
 import time
 
 from bench.paper import Steps, command_line, test_seed_args, train_step, write_record, write_run_records
-from bench.records import ENVS, TEST_SEEDS, git_commit, machine, run_child, shown
+from bench.records import DISTRACTOR_ENVS, ENVS, TEST_SEEDS, git_commit, machine, run_child, shown
 from jaxbridge.run.comparison import run_labels, write_comparison
 
 APPROACHES = ("ours", "ours_closest_object", "ours_learned_selection")
-DISTRACTOR_ENVS = ("coffee_distractor",)  # variants where an object nearer the stuck robot is the wrong one
 COST_SEEDS, COST_CYCLES = 8, 20
 
 
