@@ -84,7 +84,8 @@ def parse_args(argv):
     parser.add_argument("--render", type=Path, default=None, metavar="PATH.png",
                         help="also draw one evaluated episode to this PNG: the world, the robot's path coloured by "
                              "who was in control (planner, bridge, CallPlanner) and what the bridge fixed (doors it opened; "
-                             "Coffee: the jug it twisted, with the arm's height, tilt and wrist over time)")
+                             "Coffee: the jug it twisted, with the arm's height, tilt and wrist over time); a learned "
+                             "selector's rings around the objects it attended to at each decision, as opaque as the weight")
     parser.add_argument("--gif", type=Path, default=None, metavar="PATH.gif",
                         help="also animate the episode --render draws (or, without --render, the one it would "
                              "pick) to this GIF: one frame per step (at most 120, keeping every change of "

@@ -13,6 +13,7 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import matplotlib.colors
 import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
@@ -38,6 +39,10 @@ class EpisodeTrace:
     slot: np.ndarray | None = None  # int32[steps]: the object it acts on (the env's slot)
     param: np.ndarray | None = None  # float32[steps]: its continuous parameter
     decided: np.ndarray | None = None  # bool[steps]: the bridge chose that skill (or CallPlanner) then
+    # A learned object selector's attention at each of its decisions (zeros elsewhere), over the object view's
+    # slots, and each slot's type id (an index into the env's object_types); None for other bridges.
+    attention: np.ndarray | None = None  # float[steps, N]
+    object_type: np.ndarray | None = None  # int[N]
 
     @property
     def steps(self) -> int:
@@ -158,6 +163,29 @@ def robot_marks(ax, trace: EpisodeTrace, upto: int, when: str, radius: float) ->
         handles.append(Line2D([], [], ls="", marker="o", markersize=8, markerfacecolor=fc, markeredgecolor="black",
                               label=label))
     return handles
+
+
+ATTENTION = "#00897b"
+
+
+def attention_marks(ax, drawer: "Drawer", env: NoveltyEnv, trace: EpisodeTrace, upto: int) -> list:
+    """At each of the bridge's decisions in the first `upto` steps, a ring around every object it attended
+    to, as opaque as its weight (those under 5% left out), where the picture shows the object; a legend
+    handle if any."""
+    types, names = trace.object_type, list(type(env).object_types)
+    points, weights = [], []
+    for step, slot in zip(*np.nonzero(trace.attention[:upto] >= 0.05)):
+        first = int(np.argmax(types == types[slot]))  # the slot's index among its type's: the drawer's slot
+        xy = drawer.object_xy(env, trace, names[types[slot]], int(slot - first), int(step))
+        if xy is not None:
+            points.append(xy)
+            weights.append(float(trace.attention[step, slot]))
+    if not points:
+        return []
+    colours = [matplotlib.colors.to_rgba(ATTENTION, w) for w in weights]
+    ax.scatter(*np.asarray(points).T, s=260, facecolors="none", edgecolors=colours, linewidths=2.0, zorder=6)
+    return [Line2D([], [], ls="", marker="o", markersize=12, markerfacecolor="none", markeredgecolor=ATTENTION,
+                   markeredgewidth=2.0, label="attended at a bridge decision (opacity: weight)")]
 
 
 def bridge_badges(ax, points: np.ndarray, order: np.ndarray) -> list:

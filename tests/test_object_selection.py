@@ -105,3 +105,22 @@ def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_l
     refused = run("eval.py", str(experiment / "ours_learned_selection"), str(experiment / "ours_learned_selection"),
                   "--attention")
     assert refused.returncode == 2 and "--attention reports on one RUN's evaluation" in refused.stderr
+    # --render shades what it attends to: the re-run episode carries, at each bridge decision, weights over
+    # the object slots a skill may act on that sum to one, and nothing elsewhere; the picture draws them.
+    import jaxbridge
+    from jaxbridge.viz.render import render_episode, trace_episodes
+    policy = jaxbridge.load(experiment, "ours_learned_selection")
+    episodes = policy.evaluate(seeds=[0], num_tasks=2)
+    bridge, params, controls = policy.on(episodes.batch)
+    trace = trace_episodes(episodes.batch, bridge, params, [0], 0, controls, expected=episodes.result)[0]
+    env = episodes.batch.env
+    decided = trace.decided.astype(bool)
+    assert trace.attention.shape == (trace.steps, env.num_objects) and decided.any()
+    np.testing.assert_allclose(trace.attention[decided].sum(-1), 1.0, rtol=1e-5)
+    assert not trace.attention[~decided].any() and not trace.attention[:, ~np.isin(np.arange(env.num_objects), env.candidate_slots)].any()
+    assert list(trace.object_type[:2]) == [0, 1] and render_episode(env, trace).startswith(b"\x89PNG")
+    from matplotlib.figure import Figure
+    from envs_jax.drawing import attention_marks
+    ax = Figure().add_subplot()
+    assert len(attention_marks(ax, env.drawer(), env, trace, trace.steps)) == 1 and len(ax.collections) == 1
+    assert not attention_marks(Figure().add_subplot(), env.drawer(), env, trace, 0)  # nothing decided yet

@@ -39,6 +39,10 @@ class CoffeeDrawer(Drawer):
         return jnp.concatenate([state.robot[2:], state.jug_xy, state.jug_rot[None], flags, state.cup_liquid])
 
     def object_xy(self, env, trace, kind, slot, upto):
+        if kind == "jug":
+            return trace.details[upto, self.JUG:self.JUG + 2]
+        if kind == "machine":
+            return coffee.DISPENSE[:2]
         return env.task_arrays(trace.spec).cup_xy[slot] if kind == "cup" else None
 
     def bridge_summary(self, trace):

@@ -22,7 +22,9 @@ class LightSwitchDoorDrawer(Drawer):
         return np.stack([trace.xy[:, 0], np.arange(trace.steps + 1)], axis=-1)
 
     def object_xy(self, env, trace, kind, slot, upto):
-        return np.array([slot + 0.5, upto]) if kind == "cell" else None
+        task = env.task_arrays(trace.spec)  # a door where its keys turn, as the object view places it
+        x = {"cell": slot + 0.5, "door": task.keys_cell[slot] + 0.5, "light": task.num_cells - 0.5}.get(kind)
+        return None if x is None else np.array([x, upto])
 
     def draw_background(self, ax, env, trace):
         cells, end = int(env.task_arrays(trace.spec).num_cells), max(trace.steps, 1)

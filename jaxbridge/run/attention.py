@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from jaxbridge.core.episode import token_slots
@@ -29,6 +28,15 @@ class Attention:
         return float(np.nansum(self.agreement * self.decisions) / total) if total else float("nan")
 
 
+def slot_weights(env, net: ObjectQNetwork, q, features: jax.Array) -> np.ndarray:
+    """float[T, B, N]: how much each episode's network (q: per-episode parameters [B, ...]) attends to each
+    object slot of its observations (features [T, B, tokens]); zero for slots that are not tokens."""
+    weights = np.asarray(jax.vmap(lambda q, f: attention(net, q, f), in_axes=(0, 1), out_axes=1)(q, features))
+    slots = np.zeros(weights.shape[:-1] + (env.num_objects,), np.float32)
+    slots[..., token_slots(env)] = weights
+    return slots
+
+
 def attention_agreement(policy: TrainedPolicy, batch: TaskBatch, rollout_seed: int = 0) -> Attention:
     """Re-run `batch`'s greedy episodes recording each step; at every bridge decision compare the network's
     most attended object with the env's `oracle_object` of that state (decisions without one are left out)."""
@@ -38,8 +46,7 @@ def attention_agreement(policy: TrainedPolicy, batch: TaskBatch, rollout_seed: i
     bridge, greedy, controls = policy.on(batch)
     _, records = batch_rollout(batch, bridge, greedy, rollout_seed, controls, record=True)  # evaluate's episodes
     oracle = np.asarray(jax.vmap(jax.vmap(batch.env.oracle_object))(records.env_state))  # [T, B]
-    looked = token_slots(batch.env)[np.asarray(jax.vmap(lambda q, f: jnp.argmax(attention(net, q, f), -1), in_axes=(0, 1), out_axes=1)(
-        greedy.q, records.features))]  # [T, B]: the slot each episode's own network looks at most
+    looked = slot_weights(batch.env, net, greedy.q, records.features).argmax(-1)  # [T, B]: each episode's own network
     counted = np.asarray(records.decided) & (oracle >= 0)
     seeds = list(dict.fromkeys(batch.seeds.tolist()))
     decisions = np.array([counted[:, batch.seeds == s].sum() for s in seeds])

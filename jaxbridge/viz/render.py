@@ -5,7 +5,7 @@ see the bridge work.
 `trace_episodes` re-runs chosen episodes of an evaluation with recording on. It uses the evaluation's
 per-episode keys, so these are the very episodes that were scored (checked against the evaluation's
 results), and keeps only a small view of each recorded state (a recorded state carries its whole task)
-and the ground skill each step ran. `render_episode` draws one trace through an `EpisodeFigure`, which
+and the ground skill each step ran; of a learned object selector, also its attention at each decision. `render_episode` draws one trace through an `EpisodeFigure`, which
 `animate` also draws its frames with; what the world looks like is the env's business (`drawers`).
 """
 from __future__ import annotations
@@ -20,10 +20,11 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from envs_jax.base import NoveltyEnv
-from envs_jax.drawing import Drawer, EpisodeTrace, draw_path, moment
+from envs_jax.drawing import Drawer, EpisodeTrace, attention_marks, draw_path, moment
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.meta_policy import Controls, EpisodeResult, rollout
 from jaxbridge.core.tasks import TaskBatch
+from jaxbridge.run.attention import slot_weights
 from jaxbridge.viz.episodes import bridge_choices
 
 
@@ -45,7 +46,8 @@ def _recorded_rollout(env, bridge, drawer, params, batch, keys, max_steps, contr
     per_state = lambda state: (*drawer.snapshot(env, state), drawer.details(env, state))
     xy, door_open, details = jax.vmap(jax.vmap(per_state))(records.env_state)  # [T, B, ...]
     per_step = (records.actor, records.skill, records.slot, records.param, records.decided)
-    return result, per_step, (xy, door_open, details)
+    seen = records.features if controls.objects else None  # object tokens: what a learned selector attends to
+    return result, per_step, (xy, door_open, details), seen
 
 
 def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, seed: int = 0,
@@ -63,13 +65,18 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
     # One step past the longest horizon, so the last record holds the final state. An episode's draws for
     # its first max_steps steps do not depend on how many are drawn (partitionable threefry); the check
     # against `expected` below would catch it if they did.
-    result, (actor, skill, slot, param, decided), (xy, door_open, details) = jax.tree.map(np.asarray, _recorded_rollout(
-        batch.env, bridge, drawer_for(batch.env), params, take(batch.arrays), keys, batch.max_steps + 1, controls,
-        jnp.asarray(batch.seeds[idx], jnp.int32)))
+    result, (actor, skill, slot, param, decided), (xy, door_open, details), seen = jax.tree.map(
+        np.asarray, _recorded_rollout(batch.env, bridge, drawer_for(batch.env), params, take(batch.arrays), keys,
+                                      batch.max_steps + 1, controls, jnp.asarray(batch.seeds[idx], jnp.int32)))
     if expected is not None:
         for field in ("success", "steps", "planner_calls", "bridge_decisions", "stuck_events"):
             if not np.array_equal(getattr(result, field), np.asarray(getattr(expected, field))[idx]):
                 raise RuntimeError(f"the re-run episodes differ from the evaluated ones in {field}")
+    attention, object_type = None, None
+    if seen is not None:  # at the bridge's decisions only
+        attention = slot_weights(batch.env, bridge.net, params.q, seen) * decided[..., None]
+        first = jax.tree.map(lambda x: x[0], batch.arrays.tasks)
+        object_type = np.asarray(jax.jit(lambda task: batch.env.objects(batch.env.reset(task)).type_id)(first))
     traces = []
     for i in wanted:
         row = int(np.searchsorted(idx, i))
@@ -78,7 +85,8 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
             spec=batch.specs[i], seed=owner, task=int(i - np.argmax(batch.seeds == owner)),
             success=bool(result.success[row]), bridge_decisions=int(result.bridge_decisions[row]),
             actor=actor[:n, row], xy=xy[: n + 1, row], open=door_open[: n + 1, row], details=details[: n + 1, row],
-            skill=skill[:n, row], slot=slot[:n, row], param=param[:n, row], decided=decided[:n, row]))
+            skill=skill[:n, row], slot=slot[:n, row], param=param[:n, row], decided=decided[:n, row],
+            attention=None if attention is None else attention[:n, row], object_type=object_type))
     return traces
 
 
@@ -127,6 +135,8 @@ class EpisodeFigure:
         before = {ax: set(ax.get_children()) for ax in self.fig.axes}
         handles = draw_path(world, drawer.path(trace)[: steps + 1], trace.actor[:steps], drawer.in_place)
         handles += drawer.draw_state(world, env, trace, upto) + self.fixed_handles
+        if trace.attention is not None:
+            handles += attention_marks(world, drawer, env, trace, steps)
         if not self.fixed_legend:
             handles += _choice_entries(env, trace, steps)
             world.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
