@@ -23,8 +23,8 @@ class LightSwitchDoorDrawer(Drawer):
 
     def object_xy(self, env, trace, kind, slot, upto):
         task = env.task_arrays(trace.spec)  # a door where its keys turn, as the object view places it
-        x = {"cell": slot + 0.5, "door": task.keys_cell[slot] + 0.5, "light": task.num_cells - 0.5}.get(kind)
-        return None if x is None else np.array([x, upto])
+        cell = {"cell": lambda: slot, "door": lambda: task.keys_cell[slot], "light": lambda: task.num_cells - 1}.get(kind)
+        return None if cell is None else np.array([cell() + 0.5, upto])
 
     def draw_background(self, ax, env, trace):
         cells, end = int(env.task_arrays(trace.spec).num_cells), max(trace.steps, 1)
