@@ -2,10 +2,10 @@
 
 The paper's feature selection looks at the interactable object closest to the robot where it got stuck.
 In Coffee that is the jug: the planner's PickJug leaves the robot at the handle, 0.42 from the jug's
-centre. Here every task, the training task too, moves its first cup's centre DECOY_GAP past the handle,
-so that cup is nearer to the stuck robot than the jug is; its features say nothing of the rotation
-the bridge must fix. The training task has it too: a selector learns to pass over an object only where
-it has met one. Everything else is Coffee's (the cup is filled like any other).
+centre. Here every task moves its first cup's centre DECOY_GAP past the handle, so that cup is nearer to
+the stuck robot than the jug is; its features say nothing of the rotation the bridge must fix. The
+training task has it too: a selector learns to pass over an object only where it has met one.
+Everything else is Coffee's (the cup is filled like any other).
 """
 from __future__ import annotations
 
@@ -22,8 +22,6 @@ from envs_jax.coffee.world import CoffeeTask
 # From the handle, outwards: the cup (radius 0.24) clears the jug (radius 0.4) at 0.72 from its centre
 # and is 0.3 from the robot at the handle, against the jug's 0.42.
 DECOY_GAP = 0.3
-
-
 # The jug's x at most this: pouring holds the jug 0.96 right of a cup, and the robot at its handle must
 # stay inside the workspace (x <= 10) for the jug to reach the decoy cup.
 JUG_MAX_X = 8.3

@@ -67,10 +67,10 @@ def closest_object_features(env: NoveltyEnv, state: Any, stuck_state: Any) -> ja
     """float32[1 + W + 6]: the paper's selection as one function of the object view. The object is chosen
     in the stuck state and read in this one: a flag that there is one, its features and its position
     relative to the robot (zeros without one), then how far the robot has moved since it got stuck."""
-    slot, found = closest_object(env.objects(stuck_state))
-    now, robot_then = env.objects(state), env.objects(stuck_state).position[0]
+    then, now = env.objects(stuck_state), env.objects(state)
+    slot, found = closest_object(then)
     chosen = jnp.concatenate([now.features[slot], relative_to_robot(now.position[slot], now.position[0])])
-    moved = relative_to_robot(now.position[0], robot_then)
+    moved = relative_to_robot(now.position[0], then.position[0])
     return jnp.concatenate([found[None].astype(jnp.float32), jnp.where(found, chosen, 0.0), moved])
 
 
