@@ -317,7 +317,8 @@ class Doorknobs(NoveltyEnv):
     # The paper's objects (envs.md §3): the robot, the rooms and the doors, each door at its knob's corner.
     object_types = {"robot": (), "room": (), "door": ("rot", "target_rot", "open")}
     num_objects = property(lambda self: 1 + 3 * self._rooms)  # the robot, R rooms, 2R door slots
-    candidate_slots = property(lambda self: 1 + self._rooms + np.arange(2 * self._rooms))  # the doors
+    # the door slots between two rooms of the grid (a slot on its edge never holds a door)
+    candidate_slots = property(lambda self: 1 + self._rooms + np.flatnonzero(self._layout[0][:, 1] >= 0))
 
     def objects(self, state: State) -> Objects:
         task, group = state.task, lambda *args: Objects.of_type(*args, self.object_width)
