@@ -50,8 +50,3 @@ def test_where_the_planner_gets_stuck_the_closest_object_is_the_jug_unless_a_cup
     stuck = np.asarray(records.stuck & records.live)
     chosen = np.asarray(jax.vmap(jax.vmap(lambda s: closest_object(env.objects(s))[0]))(records.env_state))[stuck]
     assert stuck.sum() >= 8 and (chosen == {"the jug": 1, "the first cup": 3}[closest]).all()
-
-
-def test_the_distractor_env_keeps_the_env_contract():
-    from jaxbridge import check_env
-    assert check_env(CoffeeDistractor) is CoffeeDistractor
