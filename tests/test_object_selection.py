@@ -110,10 +110,10 @@ def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_l
     import jaxbridge
     from jaxbridge.viz.render import render_episode, trace_episodes
     policy = jaxbridge.load(experiment, "ours_learned_selection")
-    episodes = policy.evaluate(seeds=[0], num_tasks=2)
-    bridge, params, controls = policy.on(episodes.batch)
-    trace = trace_episodes(episodes.batch, bridge, params, [0], 0, controls, expected=episodes.result)[0]
-    env = episodes.batch.env
+    batch = policy.tasks(seeds=[0], num_tasks=2)
+    bridge, params, controls = policy.on(batch)
+    trace = trace_episodes(batch, bridge, params, [0], 0, controls)[0]
+    env = batch.env
     decided = trace.decided.astype(bool)
     assert trace.attention.shape == (trace.steps, env.num_objects) and decided.any()
     np.testing.assert_allclose(trace.attention[decided].sum(-1), 1.0, rtol=1e-5)
