@@ -22,9 +22,12 @@ class LightSwitchDoorDrawer(Drawer):
         return np.stack([trace.xy[:, 0], np.arange(trace.steps + 1)], axis=-1)
 
     def object_xy(self, env, trace, kind, slot, upto):
-        task = env.task_arrays(trace.spec)  # a door where its keys turn, as the object view places it
-        cell = {"cell": lambda: slot, "door": lambda: task.keys_cell[slot], "light": lambda: task.num_cells - 1}.get(kind)
-        return None if cell is None else np.array([cell() + 0.5, upto])
+        if kind == "cell":
+            return np.array([slot + 0.5, upto])
+        task = env.task_arrays(trace.spec)
+        if kind == "door":  # where its keys turn, as the object view places it
+            return np.array([task.keys_cell[slot] + 0.5, upto])
+        return np.array([task.num_cells - 0.5, upto]) if kind == "light" else None
 
     def draw_background(self, ax, env, trace):
         cells, end = int(env.task_arrays(trace.spec).num_cells), max(trace.steps, 1)

@@ -45,6 +45,12 @@ def token_width(env: NoveltyEnv) -> int:
     return len(env.object_types) + env.object_width + POSITION_DIM + 1
 
 
+def token_position(env: NoveltyEnv) -> tuple[int, int]:
+    """(start, end): where a token's relative position lies (after its one-hot type and features)."""
+    start = len(env.object_types) + env.object_width
+    return start, start + POSITION_DIM
+
+
 def relative_to_robot(position: jax.Array, robot: jax.Array) -> jax.Array:
     """Offsets from the robot squashed to (-1, 1) per axis, d / (1 + |d|): exact near the robot, bounded
     far away, so a larger test task's distances are not beyond the training task's."""

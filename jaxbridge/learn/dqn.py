@@ -11,9 +11,9 @@ import numpy as np
 import optax
 from flax import struct
 
-from envs_jax.base import POSITION_DIM, NoveltyEnv
+from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import Normalise, ParamSamples, PolyakPer, TargetInit, TrainConfig
-from jaxbridge.core.episode import token_width
+from jaxbridge.core.episode import token_position, token_width
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.object_q import ObjectQNetwork
@@ -112,8 +112,7 @@ def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork
                         normalise=config.normalise is Normalise.MINMAX)
     if config.normalise is not Normalise.NONE:
         raise ValueError(f"approach {config.approach} does not scale its object tokens: no normalise")
-    position = len(env.object_types) + env.object_width
-    return ObjectQNetwork(token_width(env), env.num_skills + 2, (position, position + POSITION_DIM), config.hidden_sizes,
+    return ObjectQNetwork(token_width(env), env.num_skills + 2, token_position(env), config.hidden_sizes,
                           config.activation, config.output_init, ensemble=config.q_ensemble)
 
 

@@ -53,7 +53,7 @@ class ObjectAttention(nn.Module):
 
 
 class ObjectQMember(nn.Module):
-    """One Q-function of object tokens: attention context ++ action -> MLP -> scalar (a scan's step)."""
+    """One Q-function of object tokens: (robot's token, attended token, action) -> MLP -> scalar (a scan's step)."""
 
     token_width: int
     action_width: int  # one-hot over the skills and CallPlanner, and the parameter
@@ -77,8 +77,8 @@ class ObjectQMember(nn.Module):
         attended, _ = self.encoder(name="attention")(tokens)
         # The robot's token and the attended one: the first layer's share of them once per observation,
         # however many candidate actions.
-        return carry, mlp(SplitInput(jnp.concatenate([tokens[..., 0, :], attended], -1), action), self.hidden_sizes, self.activation, self.output_init,
-                           self.layer_norm)
+        seen = jnp.concatenate([tokens[..., 0, :], attended], -1)
+        return carry, mlp(SplitInput(seen, action), self.hidden_sizes, self.activation, self.output_init, self.layer_norm)
 
 
 class ObjectQNetwork(nn.Module):
@@ -111,8 +111,8 @@ class ObjectQNetwork(nn.Module):
 
 
 def attention(net: ObjectQNetwork, variables, observation: jax.Array) -> jax.Array:
-    """float32[..., N]: how much the robot attends to each object of `observation` (zero for the robot and
-    the objects no skill acts on); of an ensemble, the first member's."""
+    """float32[..., T]: how much the robot attends to each token of `observation` (zero for the robot's and
+    for objects no skill can act on now); of an ensemble, the first member's."""
     params = variables["params"]
     params = params["member"] if net.ensemble == 1 else jax.tree.map(lambda x: x[0], params["members"])
     member = ObjectQMember(*net.fields(), parent=None)

@@ -5,8 +5,9 @@ see the bridge work.
 `trace_episodes` re-runs chosen episodes of an evaluation with recording on. It uses the evaluation's
 per-episode keys, so these are the very episodes that were scored (checked against the evaluation's
 results), and keeps only a small view of each recorded state (a recorded state carries its whole task)
-and the ground skill each step ran; of a learned object selector, also its attention at each decision. `render_episode` draws one trace through an `EpisodeFigure`, which
-`animate` also draws its frames with; what the world looks like is the env's business (`drawers`).
+and the ground skill each step ran; of a learned object selector, also what it saw at each decision, for
+its attention. `render_episode` draws one trace through an `EpisodeFigure`, which `animate` also draws
+its frames with; what the world looks like is the env's business (`drawers`).
 """
 from __future__ import annotations
 
@@ -46,7 +47,9 @@ def _recorded_rollout(env, bridge, drawer, params, batch, keys, max_steps, contr
     per_state = lambda state: (*drawer.snapshot(env, state), drawer.details(env, state))
     xy, door_open, details = jax.vmap(jax.vmap(per_state))(records.env_state)  # [T, B, ...]
     per_step = (records.actor, records.skill, records.slot, records.param, records.decided)
-    seen = records.features if controls.objects else None  # object tokens: what a learned selector attends to
+    seen = None
+    if controls.objects:  # object tokens, what a learned selector attends to, and each object slot's type
+        seen = (records.features, env.objects(jax.tree.map(lambda x: x[0, 0], records.env_state)).type_id)
     return result, per_step, (xy, door_open, details), seen
 
 
@@ -74,9 +77,8 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
                 raise RuntimeError(f"the re-run episodes differ from the evaluated ones in {field}")
     attention, object_type = None, None
     if seen is not None:  # at the bridge's decisions only
-        attention = slot_weights(batch.env, bridge.net, params.q, seen) * decided[..., None]
-        first = jax.tree.map(lambda x: x[0], batch.arrays.tasks)
-        object_type = np.asarray(jax.jit(lambda task: batch.env.objects(batch.env.reset(task)).type_id)(first))
+        tokens, object_type = seen
+        attention = slot_weights(batch.env, bridge.net, params.q, tokens) * decided[..., None]
     traces = []
     for i in wanted:
         row = int(np.searchsorted(idx, i))
