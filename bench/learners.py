@@ -18,8 +18,9 @@ import shutil
 import sys
 import time
 
-from bench.paper import Steps, command_line, csv_text, results_rows, test_seed_args, train_step, write_record
-from bench.records import ENVS, TEST_SEEDS, git_commit, machine
+from bench.paper import (Steps, command_line, csv_text, records_folder, results_rows, seed_flags, seeds_text,
+                         test_seed_args, train_step, write_record)
+from bench.records import ENVS, git_commit, machine
 from jaxbridge.run.comparison import write_comparison
 
 LEARNERS = {"dqn": ("double DQN", []), "pqn": ("PQN", ["--preset", "pqn"])}  # run name: (label, train.py flags)
@@ -27,11 +28,9 @@ LEARNERS = {"dqn": ("double DQN", []), "pqn": ("PQN", ["--preset", "pqn"])}  # r
 
 def main(argv=None) -> int:
     args = test_seed_args("bench.learners", __doc__, "the env to compare the learners on", argv, ENVS)
-    first, count = TEST_SEEDS[0], args.num_seeds
     env, runs = args.env, args.runs.resolve()
     runs.mkdir(parents=True, exist_ok=True)
-    steps, start = Steps(runs / f"{env}-steps.json"), time.perf_counter()
-    seeds = ["--num-seeds", str(count), "--first-seed", str(first), "--cycles", str(args.cycles)]
+    steps, start, seeds = Steps(runs / f"{env}-steps.json"), time.perf_counter(), seed_flags(args)
     trained = {name: steps.run(name, lambda name=name, flags=flags: train_step(
         runs / f"{env}-{name}", ["--env", env, "--approaches", "ours", *seeds, *flags]))
         for name, (_, flags) in LEARNERS.items()}
@@ -42,12 +41,11 @@ def main(argv=None) -> int:
         shutil.copy(runs / f"{env}-{name}" / "ours" / "metrics.csv", compared / name / "metrics.csv")
     write_comparison(compared, env, {name: f"ours, {label}" for name, (label, _) in LEARNERS.items()})
 
-    out = args.records / env
-    out.mkdir(parents=True, exist_ok=True)
+    out = records_folder(args)
     (out / "learners.csv").write_text(csv_text(results_rows(compared)))
     shutil.copy(compared / "curves.png", out / "learners.png")
-    record = {"env": env, "commit": git_commit(), "command": command_line("bench.learners", args),
-              "seeds": f"{first}-{first + count - 1}", "cycles": args.cycles,
+    record = {"env": env, "commit": git_commit(), "command": command_line(args), "seeds": seeds_text(args),
+              "cycles": args.cycles,
               "labels": {name: label for name, (label, _) in LEARNERS.items()}, "steps": trained,
               "wall_s": round(sum(step["wall_s"] for step in trained.values()), 1), "machine": machine()}
     return write_record(out / "learners.json", record, start)

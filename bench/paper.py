@@ -27,10 +27,13 @@ import sys
 import time
 from pathlib import Path
 
-from bench.records import ENVS, RECORDS, ROOT, TEST_SEEDS, git_commit, machine, run_child, shown
+from bench.ledger import add_reason_flags, append, seed_set
+from bench.records import (ENVS, RECORDS, ROOT, TEST_SEEDS, TEST_SETS, check_clean, git_commit, machine, refuse, run_child,
+                           shown)
 from bench.results_blocks import PRESET_RUN
 from jaxbridge.run.comparison import run_labels, write_comparison
 from jaxbridge.run.experiments import load_experiment
+from jaxbridge.utils.files import write_atomic
 
 
 def train_step(experiment: Path, flags: list[str]) -> dict:
@@ -98,8 +101,10 @@ class Steps:
         return self.done[name]
 
 
-def test_seed_args(module: str, doc: str, env_help: str, argv, envs: tuple[str, ...] = ENVS) -> argparse.Namespace:
-    """The flags of a bench command that trains on the test seeds and writes records."""
+def test_seed_args(module: str, doc: str, env_help: str, argv, envs: tuple[str, ...] = ENVS,
+                   seed_set: int = TEST_SEEDS[0]) -> argparse.Namespace:
+    """The flags of a bench command that trains on a test-seed set and writes records; the run's ledger
+    row appended and the records' folder settled (`begin`)."""
     parser = argparse.ArgumentParser(prog=f"python -m {module}", description=doc,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     runs = module.removeprefix("bench.")
@@ -108,22 +113,63 @@ def test_seed_args(module: str, doc: str, env_help: str, argv, envs: tuple[str, 
                         help=f"where the training runs go (default: runs/{runs})")
     parser.add_argument("--records", type=Path, default=RECORDS,
                         help="where the env's records go (default: docs/results)")
-    parser.add_argument("--num-seeds", type=int, default=TEST_SEEDS[1],
-                        help="test seeds from 200 (default: %(default)s; fewer only to try the command out)")
+    parser.add_argument("--seed-set", type=int, default=seed_set, choices=sorted(TEST_SETS),
+                        help="the test-seed set's first seed (default: %(default)s)")
+    parser.add_argument("--num-seeds", type=int, default=TEST_SETS[seed_set],
+                        help="seeds of the set, from its first (default: %(default)s; fewer only to try the command out)")
     parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
-    return parser.parse_args(argv)
+    parser.add_argument("--allow-dirty", action="store_true",
+                        help="run on code with uncommitted changes (a local try): the records go to RUNS/records, "
+                             "not docs/; the ledger row is written all the same")
+    add_reason_flags(parser)
+    args = parser.parse_args(argv)
+    args.module, args.seed_default = module, seed_set
+    begin(args)
+    return args
 
 
-def command_line(module: str, args: argparse.Namespace) -> str:
-    """The command as a record shows it: the flags that differ from their defaults."""
-    return f"python -m {module} --env {args.env}" + "".join(
-        f" --{flag} {value}" for flag, value, default in (("num-seeds", args.num_seeds, TEST_SEEDS[1]),
-                                                          ("cycles", args.cycles, 100)) if value != default)
+def begin(args: argparse.Namespace) -> None:
+    """Before any work: refuse dirty code without --allow-dirty (exit 2), append the run's ledger row,
+    and point args.records where this run's records may go (outside docs/ for dirty code)."""
+    try:
+        seeds = seed_set(args.seed_set, args.num_seeds)
+    except ValueError as err:
+        refuse(f"{args.module}: {err}")
+    changed = check_clean(args.module, args.allow_dirty)
+    if changed:
+        args.records = args.runs.resolve() / "records"
+        print(f"{args.module}: uncommitted code: the records go to {args.records}", flush=True)
+    append(seeds, args.env, command_line(args), args.change, args.chosen_on, git_commit(changed))
+
+
+def command_line(args: argparse.Namespace) -> str:
+    """The command as a record and the ledger show it: the flags that differ from their defaults."""
+    flags = (("seed-set", args.seed_set, args.seed_default), ("num-seeds", args.num_seeds, TEST_SETS[args.seed_set]),
+             ("cycles", args.cycles, 100))
+    return f"python -m {args.module} --env {args.env}" + "".join(f" --{f} {v}" for f, v, default in flags if v != default)
+
+
+def seed_flags(args: argparse.Namespace) -> list[str]:
+    """train.py's flags for the run's seeds and cycles."""
+    return ["--num-seeds", str(args.num_seeds), "--first-seed", str(args.seed_set), "--cycles", str(args.cycles)]
+
+
+def seeds_text(args: argparse.Namespace) -> str:
+    return f"{args.seed_set}-{args.seed_set + args.num_seeds - 1}"
+
+
+def records_folder(args: argparse.Namespace) -> Path:
+    """The env's records folder, made, before the first record file is written; refused (exit 2) if the
+    code changed under a run that began clean."""
+    check_clean(args.module, args.allow_dirty, during=True)
+    out = args.records / args.env
+    out.mkdir(parents=True, exist_ok=True)
+    return out
 
 
 def write_record(path: Path, record: dict, start: float) -> int:
-    """Write a bench command's record and say what it did; its exit status."""
-    path.write_text(json.dumps(record, indent=2) + "\n")
+    """Write a bench command's record (its folder from `records_folder`) and say what it did; its exit status."""
+    write_atomic(path, json.dumps(record, indent=2) + "\n")
     print(f"{record['command']}: done ({time.perf_counter() - start:.0f} s in this call) -> {path.parent}/; "
           "render the docs with: python -m bench.render")
     return 0
@@ -131,8 +177,7 @@ def write_record(path: Path, record: dict, start: float) -> int:
 
 def main(argv=None) -> int:
     args = test_seed_args("bench.paper", __doc__, "the env whose headline to regenerate", argv)
-    first, count = TEST_SEEDS[0], args.num_seeds
-    seeds = ["--num-seeds", str(count), "--first-seed", str(first), "--cycles", str(args.cycles)]
+    seeds = seed_flags(args)
     env, runs = args.env, args.runs.resolve()
     runs.mkdir(parents=True, exist_ok=True)
     steps = Steps(runs / f"{env}-steps.json")
@@ -144,11 +189,10 @@ def main(argv=None) -> int:
         preset_run, ["--env", env, "--approaches", "ours", "--preset", "authors", *seeds]))
     (config, approaches, _), (preset_config, _, _) = load_experiment(main_run), load_experiment(preset_run)
     protocols = list(dict.fromkeys([config.test_protocol, preset_config.test_protocol]))
-    oracle = steps.run("oracle", lambda: dict(zip(("rows", "wall_s"), oracle_rows(env, protocols, list(range(first, first + count))))))
+    oracle = steps.run("oracle", lambda: dict(zip(("rows", "wall_s"), oracle_rows(env, protocols, list(range(args.seed_set, args.seed_set + args.num_seeds))))))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(main_run), "--sweep", "novelties"]))
 
-    out = args.records / env
-    out.mkdir(parents=True, exist_ok=True)
+    out = records_folder(args)
     # the tables and figure as this checkout draws them
     write_comparison(main_run, env, run_labels(approaches))
     write_comparison(preset_run, env, run_labels(["ours"]))
@@ -158,8 +202,7 @@ def main(argv=None) -> int:
     shutil.copy(main_run / "sweep_novelties.csv", out / "sweep.csv")
     shutil.copy(main_run / "sweep_novelties.png", out / "sweep.png")
     shutil.copy(main_run / "curves.png", out / "figure.png")
-    record = {"env": env, "commit": git_commit(), "command": command_line("bench.paper", args),
-              "seeds": f"{first}-{first + count - 1}", "approaches": approaches,
+    record = {"env": env, "commit": git_commit(), "command": command_line(args), "seeds": seeds_text(args), "approaches": approaches,
               "config_version": json.loads((main_run / "ours" / "config.json").read_text())["config_version"],
               "test_protocols": {"main": protocols[0], "authors_preset": protocols[-1]},
               "steps": {"train": train, "train_authors_preset": preset,

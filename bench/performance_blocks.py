@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from bench.records import BENCH, QUICKSTART, RECORDS, SUITE, SUITE_CLAIMS, authors_seed_run_s
-from bench.results_blocks import ENV_TITLES, ENVS, env_record, label, machine_text, stat_row
+from bench.results_blocks import ENV_TITLES, ENVS, commit_text, env_record, label, machine_text, stat_row
 
 MISSING = "_Not measured yet: `{command}`._\n"
 
@@ -36,8 +36,9 @@ def quickstart_table() -> str:
         lines.append(f"| `{r['command']}` | {len(r['approaches'])} x 8 | {r['wall_s']:,.0f} s | "
                      f"{r['peak_rss_mib'] / 2**10:.2f} GiB | {per_run:.1f} | {authors[env]:,.0f} | {authors[env] / per_run:,.0f}x |")
     first = next(iter(records.values()))
-    lines += ["", f"Measured by `python -m bench.quickstart` on {machine_text(first['machine'])}, commit "
-              f"{first['commit'][:10]}. A seed-run here is the whole experiment's wall time over its approaches "
+    commits = {commit_text(r) for r in records.values()}
+    code = commit_text(first) if len(commits) == 1 else "; ".join(f"{ENV_TITLES[e]} {commit_text(r)}" for e, r in records.items())
+    lines += ["", f"Measured by `python -m bench.quickstart` on {machine_text(first['machine'])}, {code}. A seed-run here is the whole experiment's wall time over its approaches "
               "x seeds; the authors' is one seed of ours alone (docs/results/authors_times.csv; Coffee's run "
               "never finished, so its learning time)."]
     return "\n".join(lines) + "\n"
@@ -80,7 +81,7 @@ def bench_table() -> str:
     results = read(BENCH)
     if results is None:
         return MISSING.format(command="python -m bench")
-    commit = f", commit {results['commit'][:10]}" if "commit" in results else ""
+    commit = f", {commit_text(results)}" if "commit" in results else ""
     lines = [bench_rows(results), "", f"`python -m bench` on {results['cpu_cores']} cores (jax {results['jax']}{commit}), "
              f"load {results['load_before'][0]} before; {results['settings']['measured_cycles']} measured cycles."]
     return "\n".join(lines) + "\n"
@@ -104,8 +105,8 @@ def gpu_table() -> str:
                          f"{r['s_per_seed_run']:.2f} | {r['x_authors']:,.0f}x | {r['peak_device_bytes_so_far'] / 2**30:.1f} |")
     sweep = (GPU / "sweep.log").read_text().strip().splitlines()[-1]
     lines += ["", f"{sweep} (`train.py --seed-block 64`, learning rates 1e-3 and 3e-4 x epsilon decays 3.8e-5 and "
-              "1e-4, one compiled program). Measured by `bash bench/gpu.sh` on " + run["machine"] + f", commit "
-              f"{run['commit'][:10]}; {run['note']}. The files: docs/results/gpu/."]
+              "1e-4, one compiled program). Measured by `bash bench/gpu.sh` on " + run["machine"] + f", "
+              f"{commit_text(run)}; {run['note']}. The files: docs/results/gpu/."]
     return "\n".join(lines) + "\n"
 
 
@@ -116,11 +117,11 @@ def suite_line() -> str:
     wall = record["wall_s"]
     line = (f"`{record['command']}`: {record['outcome'].split(' in ')[0]} in {wall:,.0f} s ({int(wall // 60)} min "
             f"{wall % 60:.0f} s; the target: under 8 minutes) "
-            f"on {machine_text(record['machine'])}, commit {record['commit'][:10]} (`python -m bench.suite`).\n")
+            f"on {machine_text(record['machine'])}, {commit_text(record)} (`python -m bench.suite`).\n")
     if claims is None:
         return line + "\n" + MISSING.format(command="python -m bench.suite --claims")
     return line + (f"\n`{claims['command']}`: {claims['outcome'].split(' in ')[0]} in {claims['wall_s']:,.0f} s "
-                   f"on {machine_text(claims['machine'])}, commit {claims['commit'][:10]} "
+                   f"on {machine_text(claims['machine'])}, {commit_text(claims)} "
                    f"(`python -m bench.suite --claims`).\n")
 
 

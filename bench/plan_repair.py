@@ -18,8 +18,9 @@ from __future__ import annotations
 import sys
 import time
 
-from bench.paper import Steps, command_line, test_seed_args, train_step, write_record, write_run_records
-from bench.records import ENVS, TEST_SEEDS, git_commit, machine, run_child, shown
+from bench.paper import (Steps, command_line, records_folder, seed_flags, seeds_text, test_seed_args, train_step,
+                         write_record, write_run_records)
+from bench.records import ENVS, git_commit, machine, run_child, shown
 from envs_jax import VARIANTS
 from jaxbridge.run.comparison import run_labels, write_comparison
 from jaxbridge.run.experiments import load_experiment
@@ -30,22 +31,20 @@ APPROACHES = "ours,plan_progress,plan_progress_replan"
 def main(argv=None) -> int:
     args = test_seed_args("bench.plan_repair", __doc__, "the env to compare on (light_switch_panel: the variant where "
                           "committing to the plan is wrong)", argv, ENVS + VARIANTS)
-    first, count = TEST_SEEDS[0], args.num_seeds
     env, runs = args.env, args.runs.resolve()
     runs.mkdir(parents=True, exist_ok=True)
     steps, run = Steps(runs / f"{env}-steps.json"), runs / env
     start = time.perf_counter()
 
-    train = steps.run("train", lambda: train_step(run, ["--env", env, "--approaches", APPROACHES, "--num-seeds",
-                                                        str(count), "--first-seed", str(first), "--cycles", str(args.cycles)]))
+    train = steps.run("train", lambda: train_step(run, ["--env", env, "--approaches", APPROACHES, *seed_flags(args)]))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
     _, approaches, _ = load_experiment(run)
     write_comparison(run, env, run_labels(approaches))
 
-    out = args.records / env
+    out = records_folder(args)
     write_run_records(run, out, "plan_repair")
-    record = {"env": env, "commit": git_commit(), "command": command_line("bench.plan_repair", args),
-              "seeds": f"{first}-{first + count - 1}", "approaches": approaches,
+    record = {"env": env, "commit": git_commit(), "command": command_line(args), "seeds": seeds_text(args),
+              "approaches": approaches,
               "steps": {"train": train, "sweep": sweep},
               "wall_s": round(train["wall_s"] + sweep["wall_s"], 1), "machine": machine()}
     return write_record(out / "plan_repair.json", record, start)

@@ -17,7 +17,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from bench.records import ENVS, QUICKSTART, git_commit, machine, run_child
+from bench.records import DIRTY_RECORDS, ENVS, QUICKSTART, ROOT, check_clean, git_commit, machine, run_child
 
 
 def measure(env: str, out: Path) -> dict:
@@ -37,21 +37,26 @@ def main(argv=None) -> int:
     parser.add_argument("--envs", default=",".join(ENVS), help="comma-separated envs (default: all three)")
     parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
                         help="train into DIR/ENV and keep the runs (default: a temporary directory, removed)")
+    parser.add_argument("--allow-dirty", action="store_true",
+                        help=f"time code with uncommitted changes: the record goes to {DIRTY_RECORDS.relative_to(ROOT)}/, not docs/")
     args = parser.parse_args(argv)
     envs = args.envs.split(",")
     unknown = [e for e in envs if e not in ENVS]
     if unknown:
         parser.error(f"unknown env {', '.join(unknown)}; choose from {', '.join(ENVS)}")
-    records = json.loads(QUICKSTART.read_text()) if QUICKSTART.is_file() else {}
+    record = DIRTY_RECORDS / QUICKSTART.name if check_clean("bench.quickstart", args.allow_dirty) else QUICKSTART
+    record.parent.mkdir(parents=True, exist_ok=True)
+    records = json.loads(record.read_text()) if record.is_file() else {}
     for env in envs:
         if args.keep is not None:
             records[env] = measure(env, args.keep)
         else:
             with tempfile.TemporaryDirectory() as tmp:
                 records[env] = measure(env, Path(tmp))
-        QUICKSTART.write_text(json.dumps(records, indent=2) + "\n")  # each env as soon as it is measured
+        check_clean("bench.quickstart", args.allow_dirty, during=True)
+        record.write_text(json.dumps(records, indent=2) + "\n")  # each env as soon as it is measured
         print(f"bench.quickstart: {env} {records[env]['wall_s']:.0f} s, peak RSS "
-              f"{records[env]['peak_rss_mib'] / 2**10:.2f} GiB -> {QUICKSTART}", flush=True)
+              f"{records[env]['peak_rss_mib'] / 2**10:.2f} GiB -> {record}", flush=True)
     return 0
 
 

@@ -18,9 +18,12 @@ QUICKSTART = RECORDS / "quickstart.json"  # bench.quickstart: the README's first
 SUITE = RECORDS / "suite.json"  # bench.suite: the README's second command
 SUITE_CLAIMS = RECORDS / "suite_claims.json"  # bench.suite --claims: the claim tests (-m claims)
 BENCH = ROOT / "bench" / "results.json"  # python -m bench: the benchmark table
-# The test seeds (first, count): every headline figure and nothing else. If a result on them ever
-# motivates a change, they are spent and the next range (300, 32) takes their place (docs/RESULTS.md).
+# The test seeds (first, count): every headline figure of the paper's envs and nothing else. If a result
+# on them ever motivates a change, they are spent (docs/RESULTS.md, Seeds).
 TEST_SEEDS = (200, 32)
+# Every test-seed set {first: count}: 200-231 the paper envs' headlines, 300-331 the new studies (and the
+# learned selector, whose shape was looked at on 200-231). Each run on them gets a ledger row (bench.ledger).
+TEST_SETS = {200: 32, 300: 32}
 
 
 def authors_seed_run_s() -> dict[str, float]:
@@ -31,12 +34,43 @@ def authors_seed_run_s() -> dict[str, float]:
     return {r["env"]: float(r["whole_run_s"] or r["learning_s"]) for r in rows}
 
 
-def git_commit() -> str:
-    """The checkout's commit, with "+changes" when its tracked files differ from it."""
-    def git(*args: str) -> str:
-        return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    commit = git("rev-parse", "HEAD") or "unknown"
-    return commit + ("+changes" if git("status", "--porcelain", "--untracked-files=no") else "")
+def _git(*args: str, root: Path = ROOT) -> str:
+    return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True).stdout.rstrip()  # porcelain lines start with a space
+
+
+def uncommitted(root: Path = ROOT) -> list[str]:
+    """The checkout's paths that differ from its commit (changed, or new and not ignored), leaving out the
+    records themselves (docs/results/), which a bench command writes as it goes."""
+    lines = _git("status", "--porcelain", "--untracked-files=all", root=root).splitlines()
+    paths = [line[3:].split(" -> ")[-1].strip('"') for line in lines]
+    return [p for p in paths if not p.startswith(f"{RECORDS.relative_to(ROOT).as_posix()}/")]
+
+
+def refuse(message: str) -> None:
+    """A bench command's refusal: one line on stderr, exit 2."""
+    print(message, file=sys.stderr)
+    raise SystemExit(2)
+
+
+def check_clean(module: str, allow_dirty: bool, during: bool = False) -> list[str]:
+    """The code's uncommitted paths; a record from them is refused (exit 2) unless `allow_dirty`.
+    `during`: the code changed under a run that began clean."""
+    changed = uncommitted()
+    if changed and not allow_dirty:
+        listed = ", ".join(changed[:3]) + (", ..." if len(changed) > 3 else "")
+        refuse(f"{module}: the code changed during the run ({listed}); no record written: commit, then run the "
+               f"command again (its finished steps are kept)" if during else
+               f"{module}: the code has uncommitted changes ({listed}); commit them, or try it out with --allow-dirty")
+    return changed
+
+
+DIRTY_RECORDS = ROOT / "runs" / "dirty_records"  # where --allow-dirty puts the records of uncommitted code
+
+
+def git_commit(changed: list[str] | None = None) -> str:
+    """The checkout's full commit, with "+changes" when its code differs from it (`changed`: the
+    `uncommitted` paths, when already read)."""
+    return (_git("rev-parse", "HEAD") or "unknown") + ("+changes" if (uncommitted() if changed is None else changed) else "")
 
 
 def shown(path: Path) -> str:

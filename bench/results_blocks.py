@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,34 @@ ENV_TITLES = {"light_switch_door": "Light Switch Door", "doorknobs": "Doorknobs"
               "light_switch_panel": "Light Switch Panel", "coffee_distractor": "Coffee Distractor"}
 PRESET_RUN = "ours_authors_preset"  # the records' name for ours with --preset authors (bench.paper)
 CYCLES = (10, 25, 50, 100)
+
+
+def commit_text(record: dict) -> str:
+    """The code a record came from, whole: its commit, a word where the tree had uncommitted changes, and
+    the commits of its steps that ran at another one (a resumed or kept step)."""
+    def whole(commit: str) -> str:
+        head, dirty, _ = commit.partition("+changes")
+        return f"{head}{' with uncommitted changes' if dirty else ''}"
+    others = {name: step["commit"] for name, step in record.get("steps", {}).items()
+              if isinstance(step, dict) and step.get("commit", record["commit"]) != record["commit"]}
+    steps = "; ".join(f"{name} at {whole(commit)}" for name, commit in others.items())
+    return f"commit {whole(record['commit'])}" + (f" (its steps: {steps})" if steps else "")
+
+
+def ledger_table() -> str:
+    """RESULTS.md's view of the test-seed ledger: per seed set, env and study, how many rows (runs and
+    record writes) it has and the latest row's change and the seeds it was chosen on."""
+    from bench import ledger
+    groups: dict[tuple, list[dict]] = {}
+    for row in ledger.rows():
+        study = re.search(r"bench\.\w+", row["ran"])
+        groups.setdefault((row["seeds"], row["env"], study[0] if study else "by hand"), []).append(row)
+    lines = ["| seeds | env | study | rows | first, last date | the latest change | chosen on |", "|---|---|---|---|---|---|---|"]
+    for (seeds, env, study), rows in groups.items():
+        latest = next(r for r in reversed(rows) if r["change"] != "-") if any(r["change"] != "-" for r in rows) else rows[-1]
+        lines.append(f"| {seeds} | {env} | {study} | {len(rows)} | {rows[0]['date']}, {rows[-1]['date']} | "
+                     f"{latest['change']} | {latest['chosen_on']} |")
+    return "\n".join(lines) + "\n"
 
 
 def label(run: str) -> str:
@@ -158,8 +187,7 @@ def provenance(run: dict) -> str:
     steps = run["steps"]
     return (f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (training "
             f"{steps['train']['wall_s']:,.0f} s, peak RSS {steps['train']['peak_rss_mib'] / 2**10:.1f} GiB; "
-            f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), trained at commit "
-            f"{steps['train'].get('commit', run['commit'])[:10]}.")
+            f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), {commit_text(run)}.")
 
 
 def ceiling(record: dict, protocol: str) -> str:
@@ -221,8 +249,8 @@ def plan_repair(env: str) -> str:
     lines = [f"Test seeds {run['seeds']}, {int(results[0]['seeds'])} seeds x {last} cycles; each cell: mean [95% CI] "
              "over seeds, IQM [95% CI] beside it.", "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
-    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit "
-              f"{run['commit'][:10]}.", "", f"![{ENV_TITLES[env]}, plan repair](results/{env}/plan_repair.png)", "",
+    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, "
+              f"{commit_text(run)}.", "", f"![{ENV_TITLES[env]}, plan repair](results/{env}/plan_repair.png)", "",
               novelty_table(env, read_csv(folder / "plan_repair_sweep.csv"), run["seeds"], run["steps"]["sweep"]["command"])]
     return "\n".join(lines)
 
@@ -249,8 +277,8 @@ def learners(env: str) -> str:
     for name, cycles in by_run.items():
         step = run["steps"][name]
         lines.append(f"| {shown[name]} | {cycles_to(cycles)} | {step['wall_s'] / last:.2f} | {step['peak_rss_mib']:,.0f} |")
-    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit "
-              f"{run['commit'][:10]} (the two trainings one after another).", "", f"![{ENV_TITLES[env]}, learners](results/{env}/learners.png)", ""]
+    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (the two trainings "
+              f"one after another), {commit_text(run)}.", "", f"![{ENV_TITLES[env]}, learners](results/{env}/learners.png)", ""]
     return "\n".join(lines)
 
 
@@ -305,7 +333,7 @@ def selection(env: str) -> str:
               f"its peak memory, both measured in one process: {run['steps']['cost']['peak_rss_mib']:,.0f} MiB.",
               f"* What it looks at (test tasks, greedy; `{run['steps']['attention']['command']}`): "
               f"{attention_text(run['attention'])}.",
-              "", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, commit {run['commit'][:10]}.",
+              "", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",
               "", f"![{ENV_TITLES[env]}, selections](results/{env}/selection.png)", "",
               novelty_table(env, sweep_rows, run["seeds"], run["steps"]["sweep"]["command"])]
     return "\n".join(lines)
@@ -337,6 +365,7 @@ BLOCKS = {**{f"headline {env}": (lambda env=env: headline(env)) for env in ENVS}
           **{f"sweep {env}": (lambda env=env: sweep_table(env)) for env in ENVS},
           **{f"plan repair {env}": (lambda env=env: plan_repair(env)) for env in ENVS + VARIANTS},
           **{f"learners {env}": (lambda env=env: learners(env)) for env in ENVS},
-          **{f"selection {env}": (lambda env=env: selection(env)) for env in ENVS + DISTRACTOR_ENVS}}
+          **{f"selection {env}": (lambda env=env: selection(env)) for env in ENVS + DISTRACTOR_ENVS},
+          "ledger": ledger_table}
 
 

@@ -16,7 +16,7 @@ import subprocess
 import sys
 import time
 
-from bench.records import ROOT, SUITE, SUITE_CLAIMS, git_commit, machine
+from bench.records import DIRTY_RECORDS, ROOT, SUITE, SUITE_CLAIMS, check_clean, git_commit, machine
 
 
 def main(argv=None) -> int:
@@ -24,8 +24,12 @@ def main(argv=None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--claims", action="store_true",
                         help="time the claim tests (python -m pytest -m claims) instead of the default suite")
+    parser.add_argument("--allow-dirty", action="store_true",
+                        help=f"time code with uncommitted changes: the record goes to {DIRTY_RECORDS.relative_to(ROOT)}/, not docs/")
     args = parser.parse_args(argv)
     command, path = (["-m", "pytest", "-m", "claims"], SUITE_CLAIMS) if args.claims else (["-m", "pytest"], SUITE)
+    if check_clean("bench.suite", args.allow_dirty):
+        path = DIRTY_RECORDS / path.name
     start = time.perf_counter()
     proc = subprocess.run([sys.executable, *command], cwd=ROOT, capture_output=True, text=True)
     wall = time.perf_counter() - start
@@ -33,8 +37,9 @@ def main(argv=None) -> int:
     if proc.returncode != 0:
         sys.stdout.write(proc.stdout[-5000:])
         raise SystemExit(f"bench.suite: the suite failed (exit {proc.returncode}); nothing recorded")
-    record = {"command": " ".join(["python", *command]), "wall_s": round(wall, 1), "outcome": outcome, "commit": git_commit(),
-              "machine": machine()}
+    record = {"command": " ".join(["python", *command]), "wall_s": round(wall, 1), "outcome": outcome,
+              "commit": git_commit(check_clean("bench.suite", args.allow_dirty, during=True)), "machine": machine()}
+    path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(record, indent=2) + "\n")
     print(f"bench.suite: {outcome} in {wall:.0f} s -> {path}")
     return 0

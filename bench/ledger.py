@@ -1,0 +1,89 @@
+"""The test-seed ledger, docs/results/ledger.csv: one row for every run on a test-seed set, appended when
+the run starts (dirty tree or not), so that a reader can see every time a set was used and why.
+
+    python -m bench.ledger --env coffee --ran "train.py --env coffee --first-seed 200 ..." \\
+        --change "the step discount (step_gamma 0.99)" --chosen-on "development seeds 0-31"
+
+The bench commands that train on test seeds (bench.paper, bench.plan_repair, bench.learners,
+bench.selection) append their row themselves; this command is for a test-seed run made any other way.
+A row: the date, the seed set, the env, what ran, the code's commit (with "+changes" when the tree was
+dirty), what changed since that set's previous run of the same study and on which seeds the change was
+chosen. `python -m bench.render` shows the ledger in docs/RESULTS.md.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import datetime
+import sys
+
+from bench.records import RECORDS, TEST_SETS, git_commit
+
+LEDGER = RECORDS / "ledger.csv"
+FIELDS = ("date", "seeds", "env", "ran", "commit", "change", "chosen_on")
+
+
+def rows() -> list[dict]:
+    """The ledger's rows, oldest first ([] before the first run)."""
+    if not LEDGER.is_file():
+        return []
+    with open(LEDGER, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def append(seeds: str, env: str, ran: str, change: str, chosen_on: str, commit: str | None = None) -> dict:
+    """Append one row (today's date, this checkout's commit unless given) and return it."""
+    row = {"date": datetime.date.today().isoformat(), "seeds": seeds, "env": env, "ran": ran,
+           "commit": commit or git_commit(), "change": change, "chosen_on": chosen_on}
+    new = not LEDGER.is_file()
+    with open(LEDGER, "a", newline="") as f:  # one short append: a row is never half in the file
+        writer = csv.DictWriter(f, fieldnames=FIELDS, lineterminator="\n")
+        if new:
+            writer.writeheader()
+        writer.writerow(row)
+    return row
+
+
+def seed_set(first: int, count: int) -> str:
+    """A test-seed set's name in the ledger, e.g. "200-231"; ValueError outside the test sets."""
+    size = TEST_SETS.get(first)
+    if size is None or not 1 <= count <= size:
+        known = ", ".join(f"{f}-{f + n - 1}" for f, n in TEST_SETS.items())
+        raise ValueError(f"seeds {first}-{first + count - 1} are not within a test-seed set ({known})")
+    return f"{first}-{first + count - 1}"
+
+
+def add_reason_flags(parser: argparse.ArgumentParser) -> None:
+    """The two flags a test-seed run states its reason with (the ledger's `change` and `chosen_on`)."""
+    parser.add_argument("--change", required=True,
+                        help="what changed since this seed set's previous run of the same study and why, in a line "
+                             "(\"first run\" for the first); goes into docs/results/ledger.csv")
+    parser.add_argument("--chosen-on", required=True,
+                        help="the seeds the change was chosen on, e.g. \"development seeds 0-31\" (\"-\" for a first "
+                             "run); goes into docs/results/ledger.csv")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.ledger", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", required=True, help="the env the run trained or evaluated on")
+    parser.add_argument("--ran", required=True, help="the command that ran, as typed")
+    parser.add_argument("--first-seed", type=int, default=min(TEST_SETS),
+                        help=f"its first seed (default: %(default)s; the sets: {', '.join(map(str, TEST_SETS))})")
+    parser.add_argument("--num-seeds", type=int, default=TEST_SETS[min(TEST_SETS)],
+                        help="how many seeds it ran (default: %(default)s)")
+    parser.add_argument("--commit", help="the code's commit it ran at (default: this checkout's, +changes if dirty)")
+    add_reason_flags(parser)
+    args = parser.parse_args(argv)
+    try:
+        seeds = seed_set(args.first_seed, args.num_seeds)
+    except ValueError as err:
+        print(f"bench.ledger: {err}", file=sys.stderr)
+        return 2
+    row = append(seeds, args.env, args.ran, args.change, args.chosen_on, args.commit)
+    print(f"ledger: {row['date']} {row['seeds']} {row['env']} at {row['commit']} -> {LEDGER}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

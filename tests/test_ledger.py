@@ -1,0 +1,110 @@
+"""The evidence's rules: every committed record on a test-seed set has a ledger row with its commit (and
+with each of its steps' commits), and a dirty checkout cannot write a record into docs/."""
+import json
+import re
+import subprocess
+
+import pytest
+
+from bench import ledger, paper, records
+from bench.records import RECORDS, TEST_SETS, uncommitted
+
+
+def records_on_test_seeds():
+    """(path, record) of every committed record whose seeds lie in a test-seed set."""
+    for path in sorted(RECORDS.glob("*/*.json")):
+        record = json.loads(path.read_text())
+        if isinstance(record, dict) and str(record.get("seeds", "")).split("-")[0] in map(str, TEST_SETS):
+            yield path, record
+
+
+def on_test_seeds(step) -> bool:
+    """A record's step that ran on test seeds: a training from a test set's first seed, or an evaluation
+    of such a run (bench.training's cost steps train development seeds)."""
+    command = step.get("command", "") if isinstance(step, dict) else ""
+    first = re.search(r"--first-seed (\d+)", command)
+    return "commit" in step and (command.startswith("python eval.py") or bool(first and int(first[1]) in TEST_SETS))
+
+
+def test_every_test_seed_record_and_step_has_a_ledger_row_with_its_commit():
+    rows = {(row["env"], row["seeds"], row["commit"]) for row in ledger.rows()}
+    records = list(records_on_test_seeds())
+    assert len(records) >= 3, "the paper envs' headline records are test-seed records"
+    for path, record in records:
+        steps = [s for s in record.get("steps", {}).values() if on_test_seeds(s)]
+        assert steps, f"{path}: no step ran on the test seeds"
+        for commit in {record["commit"], *(s["commit"] for s in steps)}:
+            assert (record["env"], record["seeds"], commit) in rows, f"{path}: no ledger row for {commit}"
+
+
+def test_the_ledger_rows_are_complete():
+    for row in ledger.rows():
+        assert set(row) == set(ledger.FIELDS) and all(row[f] for f in ledger.FIELDS), row
+        assert row["seeds"].split("-")[0] in {str(first) for first in TEST_SETS}, row
+
+
+def git(root, *args):
+    subprocess.run(["git", *args], cwd=root, check=True, capture_output=True)
+
+
+def test_uncommitted_code_counts_and_records_do_not(tmp_path):
+    git(tmp_path, "init", "-q")
+    (tmp_path / "code.py").write_text("x = 1\n")
+    (tmp_path / "docs" / "results").mkdir(parents=True)
+    (tmp_path / "docs" / "results" / "run.json").write_text("{}\n")
+    git(tmp_path, "add", "-A")
+    git(tmp_path, "-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "first")
+    assert uncommitted(tmp_path) == []
+    (tmp_path / "docs" / "results" / "run.json").write_text('{"a": 1}\n')  # a record written as the run goes
+    assert uncommitted(tmp_path) == []
+    (tmp_path / "code.py").write_text("x = 2\n")
+    (tmp_path / "new.py").write_text("y = 1\n")
+    assert sorted(uncommitted(tmp_path)) == ["code.py", "new.py"]
+
+
+@pytest.fixture
+def own_ledger(tmp_path, monkeypatch):
+    path = tmp_path / "ledger.csv"
+    monkeypatch.setattr(ledger, "LEDGER", path)
+    return path
+
+
+REASON = ["--change", "first run", "--chosen-on", "-"]
+
+
+def test_a_dirty_checkout_cannot_write_a_record(tmp_path, own_ledger, monkeypatch, capsys):
+    monkeypatch.setattr(records, "uncommitted", lambda: ["jaxbridge/core/meta_policy.py"])
+    with pytest.raises(SystemExit) as refused:
+        paper.main(["--env", "coffee", "--runs", str(tmp_path / "runs"), *REASON])
+    assert refused.value.code == 2 and not own_ledger.exists()
+    err = capsys.readouterr().err.strip()
+    assert "uncommitted changes (jaxbridge/core/meta_policy.py)" in err and "\n" not in err
+
+    args = paper.test_seed_args("bench.paper", "", "", ["--env", "coffee", "--runs", str(tmp_path / "runs"),
+                                                        "--allow-dirty", "--num-seeds", "2", *REASON])
+    assert args.records == (tmp_path / "runs").resolve() / "records"  # outside docs/
+    (row,) = ledger.rows()
+    assert (row["seeds"], row["env"], row["ran"]) == ("200-201", "coffee", "python -m bench.paper --env coffee --num-seeds 2")
+    assert row["commit"].endswith("+changes") and row["change"] == "first run"
+
+
+def test_code_changed_during_a_clean_run_writes_no_record(tmp_path, own_ledger, monkeypatch):
+    changed = []
+    monkeypatch.setattr(records, "uncommitted", lambda: list(changed))
+    args = paper.test_seed_args("bench.selection", "", "", ["--env", "coffee", "--runs", str(tmp_path), *REASON],
+                                seed_set=300)
+    assert args.records == RECORDS and ledger.rows()[0]["seeds"] == "300-331"
+    args.records = tmp_path / "records"
+    changed.append("jaxbridge/learn/dqn.py")
+    with pytest.raises(SystemExit) as refused:
+        paper.records_folder(args)
+    assert refused.value.code == 2 and not args.records.exists()
+
+
+def test_the_ledger_command_appends_a_row_and_refuses_seeds_outside_the_sets(own_ledger, capsys):
+    assert ledger.main(["--env", "doorknobs", "--ran", "train.py --env doorknobs --first-seed 300", "--first-seed", "300",
+                        "--change", "a new kind of door", "--chosen-on", "development seeds 0-31", "--commit", "abc"]) == 0
+    (row,) = ledger.rows()
+    assert (row["seeds"], row["commit"], row["chosen_on"]) == ("300-331", "abc", "development seeds 0-31")
+    assert ledger.main(["--env", "doorknobs", "--ran", "x", "--first-seed", "100", *REASON]) == 2
+    assert "not within a test-seed set" in capsys.readouterr().err and len(ledger.rows()) == 1
