@@ -1,7 +1,8 @@
 """Ours with each built-in learner on one env's test seeds: double DQN (the paper's) beside PQN, written as
 committed records.
 
-    python -m bench.learners --env light_switch_door   # -> docs/results/light_switch_door/learners*
+    python -m bench.learners --env light_switch_door --change "a rerun" --chosen-on "development seeds 0-31"
+        # -> docs/results/light_switch_door/learners*; --change, --chosen-on: its ledger row (bench.paper)
 
 Steps, each as a user runs it (child processes; wall time and peak memory recorded):
   1. train.py --env E --approaches ours on the test seeds (double DQN, the default learner);

@@ -1,7 +1,10 @@
 """One env's headline on the test seeds, regenerated from nothing and written as committed records.
 
-    python -m bench.paper --env light_switch_door      # -> docs/results/light_switch_door/
-    python -m bench.paper --env doorknobs --runs /tmp/paper
+    python -m bench.paper --env light_switch_door --change "a rerun" --chosen-on "development seeds 0-31"   # -> docs/results/light_switch_door/
+    python -m bench.paper --env doorknobs --runs /tmp/paper --change "first run" --chosen-on -
+
+--change and --chosen-on are the run's row in the test-seed ledger (docs/results/ledger.csv, bench/ledger.py),
+written before any work; uncommitted code is refused (--allow-dirty: a local try, records outside docs/).
 
 Each step runs as a user would run it (the same commands, in child processes; wall time and peak memory
 of each are recorded):

@@ -18,6 +18,14 @@ def minutes(seconds: float) -> str:
     return f"{seconds / 60:.0f} minutes" if seconds >= 90 else f"{seconds:.0f} s"
 
 
+def busy_text(record: dict) -> str:
+    """Each device's busy seconds as a share of the training's wall time (its schedule.json), where recorded."""
+    schedule = record.get("schedule")
+    if schedule is None:
+        return "not recorded"
+    return ", ".join(f"{s / schedule['wall_s']:.0%}" for s in schedule["busy_s"].values())
+
+
 def quickstart_table() -> str:
     """Each env's `train.py --env E --num-seeds 8`: wall time, peak memory, and a seed-run's time against
     the authors' (one seed of ours over 100 cycles)."""
@@ -25,8 +33,8 @@ def quickstart_table() -> str:
     if records is None:
         return MISSING.format(command="python -m bench.quickstart")
     authors = authors_seed_run_s()
-    lines = ["| command | approaches x seeds | wall time | peak RSS | s per seed-run | the authors' s per seed-run (ours) | ratio |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| command | approaches x seeds | wall time | peak RSS | each core busy | s per seed-run | the authors' s per "
+             "seed-run (ours) | ratio |", "|---|---|---|---|---|---|---|---|"]
     for env in ENVS:
         r = records.get(env)
         if r is None:
@@ -34,7 +42,8 @@ def quickstart_table() -> str:
         seed_runs = len(r["approaches"]) * 8
         per_run = r["wall_s"] / seed_runs
         lines.append(f"| `{r['command']}` | {len(r['approaches'])} x 8 | {r['wall_s']:,.0f} s | "
-                     f"{r['peak_rss_mib'] / 2**10:.2f} GiB | {per_run:.1f} | {authors[env]:,.0f} | {authors[env] / per_run:,.0f}x |")
+                     f"{r['peak_rss_mib'] / 2**10:.2f} GiB | {busy_text(r)} | {per_run:.1f} | {authors[env]:,.0f} | "
+                     f"{authors[env] / per_run:,.0f}x |")
     first = next(iter(records.values()))
     commits = {commit_text(r) for r in records.values()}
     code = commit_text(first) if len(commits) == 1 else "; ".join(f"{ENV_TITLES[e]} {commit_text(r)}" for e, r in records.items())

@@ -2,8 +2,10 @@
 (plan_progress: rewarded for reaching a later state of the stuck plan, which then resumes; and
 plan_progress_replan: the same reward, then the planner replans), written as committed records.
 
-    python -m bench.plan_repair --env light_switch_door   # -> docs/results/light_switch_door/plan_repair*
-    python -m bench.plan_repair --env light_switch_panel  # the variant where committing to the plan is wrong
+    python -m bench.plan_repair --env light_switch_door --change "a rerun" --chosen-on "development seeds 0-31"
+        # -> docs/results/light_switch_door/plan_repair*; --change, --chosen-on: its ledger row (bench.paper)
+    python -m bench.plan_repair --env light_switch_panel --change "a rerun" --chosen-on "development seeds 0-31"
+        # the variant where committing to the plan is wrong
 
 Steps, each as a user runs it (child processes; wall time and peak memory recorded):
   1. train.py --env E --approaches ours,plan_progress,plan_progress_replan on the test seeds;

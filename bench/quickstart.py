@@ -5,7 +5,8 @@
 
 Runs `python train.py --env E --num-seeds 8` (the approaches of the paper's figure for E, tuning seeds
 0-7, 100 cycles) in a child process into a temporary directory (or --keep DIR), and records its wall time, its peak
-resident memory, what it trained and the mean test solve rate it reports at the last cycle per approach
+resident memory, each device's busy seconds (the run's schedule.json), what it trained and the mean test
+solve rate it reports at the last cycle per approach
 (on tuning seeds: what the quick start should print, not a claim). The README and docs/PERFORMANCE.md
 quote these records (python -m bench.render); train.py's start-up line quotes the time.
 """
@@ -24,11 +25,12 @@ def measure(env: str, out: Path) -> dict:
     """Train the env's quick start into out/ENV (which must not exist) and read back what it reports."""
     step = run_child(["python", "train.py", "--env", env, "--num-seeds", "8", "--out", str(out), "--name", env])
     experiment = json.loads((out / env / "experiment.json").read_text())
+    schedule = json.loads((out / env / "schedule.json").read_text())  # each device's busy seconds
     final = {a: round(json.loads((out / env / a / "summary.json").read_text())
                       ["per_cycle"]["test_solve_rate"]["mean"][-1], 2) for a in experiment["approaches"]}
     return {"command": f"python train.py --env {env} --num-seeds 8", "wall_s": step["wall_s"],
             "peak_rss_mib": step["peak_rss_mib"], "approaches": experiment["approaches"], "seeds": "0-7",
-            "final_test_solve_rate": final, "commit": git_commit(), "machine": machine()}
+            "final_test_solve_rate": final, "schedule": schedule, "commit": git_commit(), "machine": machine()}
 
 
 def main(argv=None) -> int:

@@ -78,12 +78,12 @@ def shown(path: Path) -> str:
     return str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path)
 
 
-def run_child(command: list[str], keep_stdout: bool = False) -> dict:
-    """Run `command` from the repository root with this process's output; its wall time and peak RSS (and,
-    with `keep_stdout`, what it printed, shown here too)."""
+def run_child(command: list[str], keep_stdout: bool = False, cwd: Path = ROOT, env: dict | None = None) -> dict:
+    """Run `command` from the repository root (or `cwd`, with `env`) with this process's output; its wall
+    time and peak RSS (and, with `keep_stdout`, what it printed, shown here too)."""
     print(f"$ {' '.join(command)}", flush=True)
     start = time.perf_counter()
-    child = subprocess.Popen([sys.executable, *command[1:]], cwd=ROOT,  # command[0] is "python", as shown
+    child = subprocess.Popen([sys.executable, *command[1:]], cwd=cwd, env=env,  # command[0] is "python", as shown
                              stdout=subprocess.PIPE if keep_stdout else None, text=True)
     printed = child.stdout.read() if keep_stdout else None  # to its end, before the wait: a full pipe would block it
     if printed is not None:

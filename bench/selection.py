@@ -2,8 +2,11 @@
 ours_closest_object (the paper's rule read off the object view) and ours_learned_selection (every object
 a token, attention choosing), written as committed records.
 
-    python -m bench.selection --env light_switch_door   # -> docs/results/light_switch_door/selection*
-    python -m bench.selection --env coffee_distractor   # a cup nearer the stuck robot than the jug
+    python -m bench.selection --env light_switch_door --change "a rerun" --chosen-on "development seeds 0-31"
+        # -> docs/results/light_switch_door/selection*, on test seeds 300-331 (--seed-set); --change,
+        # --chosen-on: its ledger row (bench.paper)
+    python -m bench.selection --env coffee_distractor --change "a rerun" --chosen-on "development seeds 0-31"
+        # a cup nearer the stuck robot than the jug
 
 Steps, each as a user runs it (child processes; wall time and peak memory recorded):
   1. python -m bench.training: seconds per cycle of ours and of the learned selector, 8 seeds x 20

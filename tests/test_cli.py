@@ -66,7 +66,9 @@ def test_progress_into_a_log_is_plain_lines(short_run):
     lines = [line for line in short_run[1].stderr.splitlines() if " cycles (" in line]
     assert "\r" not in short_run[1].stderr and len(lines) == 6, short_run[1].stderr  # 2 approaches x 3 cycles
     assert lines[-1].startswith("light_switch_door x2 seeds, 2 approaches: 6/6 cycles (100%), ")
-    assert "ETA" in lines[0] and "test=" in lines[-1]
+    # The time left from each approach's own pace: none before some approach's second cycle (its first
+    # compiles); by the fourth cycle one of the two has had its second.
+    assert "ETA" not in lines[0] and "ETA" in lines[3] and "test=" in lines[-1]
 
 
 def test_train_writes_the_run_directory(short_run):
@@ -213,7 +215,8 @@ def test_eval_hand_made_bridges_meet_the_test_tasks_train_py_would():
     assert "jaxbridge protocol" in variant.stdout.splitlines()[0]
 
 
-def test_train_runs_the_papers_figure_by_default_and_says_what_it_leaves_out():
+def test_train_runs_the_papers_figure_by_default_and_says_what_it_leaves_out(tmp_path, monkeypatch):
+    monkeypatch.setenv("JAXBRIDGE_CACHE_DIR", str(tmp_path / "jax"))  # a machine that has trained nothing
     from envs_jax import env_class
     from jaxbridge.api.training import _start_line as start_line, default_approaches
     from jaxbridge.core.config import TrainConfig
@@ -221,9 +224,26 @@ def test_train_runs_the_papers_figure_by_default_and_says_what_it_leaves_out():
     doorknobs = env_class("doorknobs")
     approaches = default_approaches(doorknobs)  # the paper's Doorknobs figure: no feature selection timed out
     assert approaches == ["ours", "no_callplanner", "random", "pure_planning", "maple_q"]
-    line = start_line(TrainConfig.for_env("doorknobs"), doorknobs, approaches)
+    line = start_line(TrainConfig.for_env("doorknobs"), doorknobs, approaches, None)
     assert line.startswith("doorknobs: training ours, no CallPlanner, random bridge, pure planning, Maple Q (pure RL) x 8 seeds")
     assert "not no feature selection" in line and "--approaches all adds it" in line
     assert default_approaches(env_class("coffee")) == ["ours", "no_feature_selection", "no_callplanner", "random",
                                                        "pure_planning", "maple_q"]
-    assert "not " not in start_line(TrainConfig.for_env("coffee"), env_class("coffee"), ["ours"])
+    assert "not " not in start_line(TrainConfig.for_env("coffee"), env_class("coffee"), ["ours"], None)
+    assert "no time estimate until this machine has trained each of them once" in line
+
+
+def test_the_start_line_estimates_from_this_machines_own_pace(tmp_path, monkeypatch):
+    monkeypatch.setenv("JAXBRIDGE_CACHE_DIR", str(tmp_path / "jax"))
+    from envs_jax import env_class
+    from jaxbridge.api.training import _start_line as start_line
+    from jaxbridge.core.config import TrainConfig
+    from jaxbridge.utils import pace
+
+    pace.record("coffee", {"ours": 0.15, "random": 0.03})  # seconds per seed-cycle measured here
+    pace.record("coffee", {"maple_q": 0.3})  # a later run adds to what is known
+    config, coffee = TrainConfig.for_env("coffee", num_seeds=8), env_class("coffee")
+    assert pace.estimate("coffee", ["ours", "random", "maple_q"], 800, workers=2) == 0.3 * 800  # the longest
+    assert pace.estimate("coffee", ["ours", "random"], 800, workers=1) == (0.15 + 0.03) * 800
+    assert pace.estimate("coffee", ["ours", "no_callplanner"], 800, workers=2) is None  # never trained here
+    assert start_line(config, coffee, ["ours", "maple_q"], 2).endswith("; about 4 min at this machine's measured pace")

@@ -69,6 +69,16 @@ def test_two_devices_give_the_metrics_and_parameters_of_one(runs):
     assert same(a, b)
 
 
+def test_a_run_widened_onto_a_second_device_mid_run_gives_the_numbers_of_one(runs, tmp_path):
+    # What the experiment's scheduler does when a worker frees its device (run/scheduling.py).
+    proc = subprocess.run([sys.executable, str(ROOT / "tests" / "widened_train.py"), str(tmp_path)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["2", "True"]  # asked after cycles 1 and 2, not after the last
+    assert json.loads((tmp_path / "ours" / "summary.json").read_text())["devices"] == "2 cpu"
+    assert same(exact(runs / "dev1" / "ours"), exact(tmp_path / "ours"))
+
+
 def test_bad_device_counts_are_one_line_errors():
     for value, message in (("0", "expected auto or a positive integer, got 0"),
                            ("foo", "expected auto or a positive integer, got 'foo'")):

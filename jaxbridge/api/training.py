@@ -3,7 +3,6 @@ and the whole run as one pure function."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import shutil
 import tempfile
 import threading
@@ -23,7 +22,7 @@ from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import rundir
 from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.errors import InputError, refusing
-from jaxbridge.utils.stats import cell_text
+from jaxbridge.utils.stats import cell_text, ci_text
 
 
 def make_train(config: TrainConfig) -> Callable[..., TrainOutput]:
@@ -66,17 +65,17 @@ class Experiment:
         return self.metrics[approach][metric].mean(axis=0)
 
     def report(self) -> str:
-        """One line per run: its test solve rate and smooth reward, means over seeds with 95% intervals."""
-        return "\n".join(_report_line(name, info) for name, info in self.summaries.items())
+        """One line per run: its test solve rate at the last cycle, its smooth test reward there and its
+        seconds; then what the numbers are (means over seeds with 95% intervals)."""
+        lines = [_report_line(name, info) for name, info in self.summaries.items()]
+        seeds = next(iter(self.summaries.values()))["seed_range"]
+        return "\n".join([*lines, f"(means over seeds {seeds} [95% bootstrap intervals]; docs/RESULTS.md says how)"])
 
 
 def _report_line(name: str, info: dict) -> str:
-    at = info["test_solve_rate_at"]
-    last = max((int(c) for c in at), default=None)
-    return (f"{name:>25}: mean test solve rate at the last cycle {info['per_cycle']['test_solve_rate']['mean'][-1]:.2f}; "
-            f"smooth reward at cycle {info['cycles']}: {cell_text(info['smooth_reward_final'])}"
-            + (f"; at cycle {last}: {cell_text(at[str(last)])}" if last else "")
-            + f" (95% CIs over seeds {info['seed_range']}; {info['elapsed_s']:.0f} s)")
+    rate, last = info["per_cycle"]["test_solve_rate"], info["cycles"]
+    return (f"{name:>25}: test solve rate at cycle {last} {ci_text(rate['mean'][-1], (rate['mean_low'][-1], rate['mean_high'][-1]))}, "
+            f"smooth test reward {cell_text(info['smooth_reward_final'])}, {info['elapsed_s']:.0f} s")
 
 
 class Training:
@@ -177,7 +176,7 @@ def prepare(env: EnvLike | None = None, approaches: str | Sequence[str] | None =
     work = lambda **events: train_approaches(config, names, run_dir, progress, workers=workers, devices=devices,
                                              replaced=replaced, grid=hyper_grid, tensorboard=tensorboard, **events)
     return Training(dataclasses.replace(config, approach=names[0]), names, run_dir, work, lock, temporary,
-                    _start_line(config, env_cls, names))
+                    _start_line(config, env_cls, names, workers))
 
 
 def prepare_resume(run_dir: str | Path, workers: int | None = None, devices: list | None = None,
@@ -291,23 +290,16 @@ def _check_reachable(config: TrainConfig, env_cls) -> None:
                          f"training task needs at least {needed[worst]} steps", "train_steps")
 
 
-# The quick start's measured times (bench.quickstart's record), where the checkout has them.
-QUICKSTART_RECORD = Path(__file__).resolve().parents[2] / "docs" / "results" / "quickstart.json"
+def _start_line(config: TrainConfig, env_cls, approaches: list[str], workers: int | None) -> str:
+    """What a run trains, what the default leaves out, and how long it should take on this machine."""
+    from jaxbridge.learn.devices import default_workers
+    from jaxbridge.utils import pace
 
-
-def _start_line(config: TrainConfig, env_cls, approaches: list[str]) -> str:
-    """What a run trains, what the default leaves out, and how long the measured default took."""
     line = (f"{env_cls.name}: training {', '.join(get_approach(a).label for a in approaches)} x {config.num_seeds} "
             f"seeds x {config.cycles} cycles")
-    if approaches != default_approaches(env_cls):
-        return line
     skipped = [a for a in APPROACHES if a not in approaches]
-    if skipped:
+    if approaches == default_approaches(env_cls) and skipped:
         line += f"; not {', '.join(get_approach(a).label for a in skipped)} ({env_cls.why_not_all}): --approaches all adds it"
-    try:
-        measured = json.loads(QUICKSTART_RECORD.read_text())[env_cls.name]
-        line += (f"; 8 seeds x 100 cycles took {measured['wall_s'] / 60:.0f} minutes on {measured['machine']['cpu_cores']} "
-                 f"CPU cores (docs/PERFORMANCE.md)")
-    except (OSError, KeyError, ValueError):  # an installed copy without the records, or an env of your own
-        pass
-    return line
+    seconds = pace.estimate(env_cls.name, approaches, config.num_seeds * config.cycles, workers or default_workers(approaches))
+    return line + (f"; about {seconds / 60:.0f} min at this machine's measured pace" if seconds is not None else
+                   "; no time estimate until this machine has trained each of them once")

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import queue
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from pathlib import Path
@@ -22,11 +21,14 @@ from jaxbridge.learn.devices import default_workers, split_devices
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint, comparison, rundir
 from jaxbridge.run.runner import Interrupted, train_settings
+from jaxbridge.run.scheduling import DevicePool
+from jaxbridge.utils import pace
 from jaxbridge.utils.distributed import is_primary, multi_process
 from jaxbridge.utils.files import WriteError, write_atomic
-from jaxbridge.utils.progress import cycle_progress
+from jaxbridge.utils.progress import ExperimentProgress
 
 EXPERIMENT_FILE = "experiment.json"
+SCHEDULE_FILE = "schedule.json"  # the wall time and each device's busy seconds (run/scheduling.py)
 # Seconds per approach in `python -m bench.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
 # longest start first, so the workers finish close together. The plan-repair baselines are not measured
 # there; they share no CallPlanner's machinery and are ordered as it.
@@ -96,15 +98,19 @@ def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir:
     # cycle are collective, and two programs' gathers must not cross.
     workers = 1 if multi_process() else workers or default_workers(programs)
     what = f"{len(approaches)} approaches" + (f" x {len(names) // len(approaches)} settings" if grid else "")
-    bar = cycle_progress(config.cycles * len(programs), f"{config.env} x{config.num_seeds} seeds, {what}",
-                         progress and primary)
+    bar = ExperimentProgress({p[0]: config.cycles for p in programs}, f"{config.env} x{config.num_seeds} seeds, {what}",
+                             min(workers, len(programs)), progress and primary)
     stop = stop or threading.Event()
-    program = ProgramRun(named, experiment_dir, env_class(config.env), bar, stop, trained, tensorboard,
-                         split_devices(devices, min(workers, len(programs))))
+    pool = DevicePool(split_devices(devices, min(workers, len(programs))), len(programs))
+    program = ProgramRun(named, experiment_dir, env_class(config.env), bar, stop, trained, tensorboard, pool)
     order, unwritable = sorted(programs, key=lambda p: -COST.get(named[p[0]].approach, 0) * len(p)), False
     try:
         results = run_side_by_side(program, order, workers, stop)
         infos = {name: info for p in programs for name, info in zip(p, results[p[0]])}
+        if primary:
+            write_atomic(experiment_dir / SCHEDULE_FILE, json.dumps(pool.record(), indent=2) + "\n")
+            pace.record(config.env, {named[n].approach: info["elapsed_s"] / (config.num_seeds * info["cycles"])
+                                     for n, info in infos.items() if info and not grid})
         return {name: infos[name] for name in names}
     except WriteError:
         unwritable = True
@@ -127,44 +133,52 @@ def write_experiment_file(experiment_dir: Path, config: TrainConfig, approaches:
 class ProgramRun:
     """Runs one program of an experiment (its runs that train as one, `program` their names): brax's
     low-level runs seed after seed, the others by train_settings on a share of the devices, which a
-    worker takes for the program and returns after it."""
+    worker takes from the pool for the program (with any spare shares it takes on the way) and gives
+    back after it."""
 
     def __init__(self, named: dict[str, TrainConfig], experiment_dir: Path, env_cls, bar, stop: threading.Event,
-                 trained: threading.Event | None, tensorboard: bool, device_shares: list):
+                 trained: threading.Event | None, tensorboard: bool, pool: DevicePool):
         self.named, self.experiment_dir, self.env_cls, self.bar = named, experiment_dir, env_cls, bar
-        self.stop, self.trained, self.tensorboard = stop, trained, tensorboard
-        self.device_shares = queue.SimpleQueue()
-        for share in device_shares:
-            self.device_shares.put(share)
+        self.stop, self.trained, self.tensorboard, self.pool = stop, trained, tensorboard, pool
 
     def __call__(self, program: list[str]) -> list[dict]:
         if self.stop.is_set():  # interrupted before this program's turn
             raise Interrupted(0)
-        setup = make_setup(self.named[program[0]], self.env_cls)
-        if setup.approach.low_level:  # brax: seed after seed, one checkpoint
-            return [self.low_level(make_setup(self.named[n], self.env_cls), self.experiment_dir / n) for n in program]
+        setup, held = make_setup(self.named[program[0]], self.env_cls), self.pool.take()
+        try:
+            bar = self.bar.for_program(program[0])
+            if setup.approach.low_level:  # brax: seed after seed, one checkpoint, on the default device
+                return [self.low_level(make_setup(self.named[n], self.env_cls), self.experiment_dir / n, bar)
+                        for n in program]
+            return self.train(setup, program, held, bar)
+        finally:
+            self.pool.give_back(held)
+
+    def train(self, setup, program: list[str], held: list, bar) -> list[dict]:
+        """The program's runs by train_settings on the first share `held`, widened onto spare ones."""
         run_dirs = [self.experiment_dir / name for name in program]
         started = all(checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
         if not started and is_primary():
             for run_dir in run_dirs:
                 rundir.fresh(run_dir)
-        share = self.device_shares.get()
-        try:
-            return train_settings(setup, [(self.named[n], d) for n, d in zip(program, run_dirs)], resume=started,
-                                  bar=self.bar, stop=self.stop, devices=share, trained=self.trained,
-                                  tensorboard=self.tensorboard)
-        finally:
-            self.device_shares.put(share)
 
-    def low_level(self, setup, run_dir: Path) -> dict:
+        def widen(wanted) -> list:
+            more = self.pool.spare(wanted)
+            held.extend(more)
+            return [d for share in more for d in share]
+        return train_settings(setup, [(self.named[n], d) for n, d in zip(program, run_dirs)], resume=started,
+                              bar=bar, stop=self.stop, devices=held[0], trained=self.trained,
+                              tensorboard=self.tensorboard, widen=widen)
+
+    def low_level(self, setup, run_dir: Path, bar) -> dict:
         from jaxbridge.run import low_level_runs  # brax: imported only when used
         done = low_level_runs.finished(run_dir, setup.config)
         if done is not None:
-            self.bar.update(setup.config.cycles)
+            bar.update(setup.config.cycles)
             return done
         if is_primary():
             rundir.fresh(run_dir)
-        return low_level_runs.train_low_level(setup, run_dir, bar=self.bar, stop=self.stop)
+        return low_level_runs.train_low_level(setup, run_dir, bar=bar, stop=self.stop)
 
 
 def run_side_by_side(run, programs: list[list[str]], workers: int, stop: threading.Event) -> dict[str, list[dict]]:

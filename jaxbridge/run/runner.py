@@ -3,6 +3,7 @@ parts beside it (run/run_state.py: the state, its start, checkpoints and files):
 exact resume, clean Ctrl-C and the numerical-fault guard."""
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 from pathlib import Path
@@ -18,6 +19,7 @@ from jaxbridge.learn.setup import Setup, make_setup
 from jaxbridge.run import checkpoint
 from jaxbridge.run.run_state import (Checkpointer, Done, RunGroup, check_checkpoint_belongs, fresh_start, load_config,
                                      restored, write_run_files)
+from jaxbridge.run.scheduling import worth_widening
 from jaxbridge.run.tensorboard import CycleEvents
 from jaxbridge.utils.files import WriteError
 from jaxbridge.utils.progress import cycle_progress
@@ -43,7 +45,8 @@ def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = Fal
 def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], progress: bool = True,
                    resume: bool = False, fault_injection: Callable | None = None, bar=None,
                    stop: threading.Event | None = None, devices: list | None = None,
-                   trained: threading.Event | None = None, tensorboard: bool = False) -> list[dict]:
+                   trained: threading.Event | None = None, tensorboard: bool = False,
+                   widen: Callable[[Callable[[int], bool]], list] | None = None) -> list[dict]:
     """Run the cycles of every (config, run directory) in `settings` as one program (continuing each
     run's latest checkpoint with `resume`), writing each run's files and checkpoints into its directory.
     The configs differ from `setup.config` only in their numeric hyperparameters (config.LEAF_FIELDS),
@@ -55,7 +58,8 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], progr
     cycle and raise Interrupted; `trained` is set after each completed cycle. `devices`: the slot axis
     is sharded over them (default: the first local device); the numbers do not depend on them, and a
     run may resume on others. `tensorboard`: also log each cycle to event files (run/tensorboard.py).
-    Returns each run's summary, in order."""
+    `widen(wanted)`: after a cycle, more devices to shard the slots over (run/scheduling.py), where
+    `wanted(count)` says they are worth their recompile. Returns each run's summary, in order."""
     start, config = time.perf_counter(), setup.config
     slots = SeedMesh(len(settings) * config.num_seeds, tuple(devices or jax.local_devices()[:1]), config.seed_block)
     group = RunGroup(setup, settings, slots)
@@ -63,17 +67,22 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], progr
     elapsed = lambda: elapsed_before + time.perf_counter() - start
     done = Done(slots.place(done.learners), done.histories)  # checkpoints hold each run's state on one device
     cycle, saver = Cycle(setup, slots, group.configs), Checkpointer(group, elapsed, saved=done.cycles)
-    display, writable = CycleDisplay(group, bar, progress, tensorboard, saved=done.cycles), True
+    display, writable, timer = CycleDisplay(group, bar, progress, tensorboard, saved=done.cycles), True, CycleTimer()
     try:
         for c in range(done.cycles + 1, config.cycles + 1):
             if stop is not None and stop.is_set():
                 raise KeyboardInterrupt
-            done = next_cycle(cycle, group, done, c, fault_injection, saver.saved)
+            with timer:
+                done = next_cycle(cycle, group, done, c, fault_injection, saver.saved)
             if trained is not None:
                 trained.set()
             display.cycle(c, [history[-1] for history in done.histories])
             if c % config.checkpoint_every == 0 or c == config.cycles:
                 saver.save(done)
+            more = widen(timer.worth(group.slots, config.cycles - c)) if widen and c < config.cycles else []
+            if more:  # the same per-seed program on more devices: the numbers stay the same
+                group, done = widened(group, done, more)
+                cycle, saver.group, timer = Cycle(setup, group.slots, group.configs), group, CycleTimer()
     except KeyboardInterrupt:
         saver.save_if_behind(done)
         raise Interrupted(done.cycles) from None
@@ -84,6 +93,36 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], progr
         display.close()
         infos = write_run_files(group, done, elapsed(), writable)
     return infos
+
+
+def widened(group: RunGroup, done: Done, devices: list) -> tuple[RunGroup, Done]:
+    """The group's slots sharded over their devices and `devices` too, and the state moved onto them."""
+    old = group.slots
+    group = dataclasses.replace(group, slots=SeedMesh(old.num_seeds, old.devices + tuple(devices), old.block))
+    return group, Done(group.slots.place(old.unpad(done.learners)), done.histories)
+
+
+class CycleTimer:
+    """Each cycle's seconds, the first's (which compiles) apart: whether more devices are worth it."""
+
+    def __init__(self):
+        self.first_s = self.last_s = None
+
+    def __enter__(self):
+        self.start = time.perf_counter()
+
+    def __exit__(self, *exc):
+        self.last_s = time.perf_counter() - self.start
+        self.first_s = self.last_s if self.first_s is None else self.first_s
+
+    def worth(self, slots: SeedMesh, cycles_left: int) -> Callable[[int], bool]:
+        """`wanted(count)`: whether `count` more devices save more than they cost (run/scheduling.py)."""
+        def wanted(count: int) -> bool:
+            wider = SeedMesh(slots.num_seeds, slots.devices + (None,) * count, slots.block)
+            compile_s = max(self.first_s - self.last_s, 0.0)
+            return worth_widening(slots.padded // slots.num_devices, wider.padded // wider.num_devices, cycles_left,
+                                  self.last_s, compile_s)
+        return wanted
 
 
 def next_cycle(cycle: Cycle, group: RunGroup, done: Done, c: int, fault_injection: Callable | None,
