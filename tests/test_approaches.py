@@ -2,6 +2,7 @@
 (reference/method.md §6), checked on the rollouts it produces and on the program it compiles to."""
 from collections import Counter
 from dataclasses import replace
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -10,14 +11,18 @@ import pytest
 
 from envs_jax.light_switch_door.env import LightSwitchDoor
 from envs_jax.precision import ExactKey
-from jaxbridge.learn.approaches import APPROACHES, get_approach
-from jaxbridge.core.bridges import RandomBridge
+from jaxbridge.core.bridges import PurePlanningBridge, RandomBridge
+from jaxbridge.core.episode import observation
+from jaxbridge.learn.approaches import (APPROACHES, KNOWN, LOW_LEVEL, PLAN_REPAIR, SELECTION, BridgeKind,
+                                       get_approach)
+from jaxbridge.learn.q_bridge import QBridge, encode
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, rollout
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.core.tasks import evaluation_batch
 
+ROOT = Path(__file__).resolve().parents[1]
 TINY = TrainConfig(num_seeds=1, episodes_per_cycle=2, num_test_tasks=2, updates_per_cycle=2, buffer_capacity=512)
 
 
@@ -58,11 +63,62 @@ def cycle_program(approach: str, host_planner: bool = True) -> Counter:
     return primitives(jax.make_jaxpr(lambda learners: cycle.run(learners, host_planner))(setup.init_learners()))
 
 
-def test_every_approach_is_registered_with_its_parts():
-    assert list(APPROACHES) == ["ours", "no_feature_selection", "no_callplanner", "random", "pure_planning", "maple_q"]
-    assert [a.learns for a in APPROACHES.values()] == [True, True, True, False, False, True]
-    with pytest.raises(ValueError, match="unknown approach"):
+def test_approach_names_are_unique_and_each_resolves_to_itself():
+    """A name or label given twice would silently replace an approach (the registries are dicts merged
+    into KNOWN) or merge two runs' lines in the figures and tables, which tell approaches apart by label."""
+    entries = [(key, a) for group in (APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION) for key, a in group.items()]
+    assert len(KNOWN) == len(entries) and all(key == a.name for key, a in entries)
+    assert len({a.label for _, a in entries}) == len(entries)
+    assert all(get_approach(name) is approach for name, approach in KNOWN.items())
+    with pytest.raises(ValueError, match="unknown approach 'clever'; choose from ours, "):
         get_approach("clever")
+
+
+@pytest.mark.parametrize("name", list(KNOWN))
+def test_each_approach_builds_its_bridge_and_a_network_as_wide_as_what_its_bridge_sees(name):
+    """The network is sized by `observation_size`, the bridge fed by `observation`: the two must agree for
+    every approach's controls, and its bridge is the kind it declares."""
+    approach = get_approach(name)
+    setup = make_setup(replace(TINY, approach=name))
+    env, controls = setup.train_env, setup.controls
+    state = env.reset(env.task_arrays(LightSwitchDoor.train_task(0)))
+    seen = observation(env, controls, state, state)
+    assert seen.shape == (approach.observation_size(env),) == (setup.learner.num_features,)
+    assert controls.planner or not controls.call_planner  # CallPlanner hands control to a planner
+    assert controls.low_level == approach.low_level == (approach.algorithm in ("ppo", "sac"))
+    if approach.low_level:
+        return  # brax's policies (tests/test_low_level.py)
+    expected = {BridgeKind.Q: QBridge, BridgeKind.RANDOM: RandomBridge, BridgeKind.NONE: PurePlanningBridge}
+    assert type(setup.bridge(env)) is expected[approach.bridge]
+
+    def q_of_what_it_sees(key):  # a fresh network's Q of (this observation, the first skill, param 0.5)
+        learner = setup.learner
+        return learner.net.apply(learner.greedy(learner.init(key)),
+                                 encode(env, seen[None], jnp.int32(0), jnp.float32(0.5)))
+
+    q = jax.eval_shape(q_of_what_it_sees, jax.random.key(0))  # traced only: a width mismatch fails here
+    assert q.shape[0] == 1 and q.dtype == jnp.float32
+
+
+def test_the_command_line_and_every_env_name_only_registered_approaches():
+    """train.py's --approaches: `all` is the paper's six, every registered name is accepted alone and all
+    together, a name given twice or unknown is refused; each env's default figure names registered ones."""
+    import argparse
+    import importlib.util
+
+    from envs_jax import BUILTIN, VARIANTS, env_class
+    from jaxbridge.api.training import default_approaches
+    spec = importlib.util.spec_from_file_location("train_cli", ROOT / "train.py")
+    train_py = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(train_py)
+    assert train_py.approach_list("all") == list(APPROACHES) and len(APPROACHES) == 6 and "ours" in APPROACHES
+    assert all(train_py.approach_list(name) == [name] for name in KNOWN)
+    assert train_py.approach_list(" , ".join(KNOWN)) == list(KNOWN)
+    for text, message in (("ours,ours", "listed twice"), ("ours,clever", "unknown approach clever")):
+        with pytest.raises(argparse.ArgumentTypeError, match=message):
+            train_py.approach_list(text)
+    for env in BUILTIN + VARIANTS:
+        assert set(default_approaches(env_class(env))) <= set(APPROACHES), env
 
 
 def test_no_callplanner_never_hands_control_back(tests_batch):

@@ -1,4 +1,4 @@
-"""The house's rules: every import points down a floor, and no module grows past ~400 lines."""
+"""The house's rules: every import points down a floor, and no module outgrows its cap."""
 import ast
 from pathlib import Path
 
@@ -7,7 +7,11 @@ ROOT = Path(__file__).resolve().parents[1]
 FLOORS = ("planner", "envs_jax", "jaxbridge.utils", "jaxbridge.core", "jaxbridge.learn", "jaxbridge.run",
           "jaxbridge.viz", "jaxbridge.api")
 PACKAGES = ("planner", "envs_jax", "jaxbridge")
-MAX_LINES = 420
+# Caps by principle, not by today's sizes: a module is one idea read in one sitting (past 500 lines it
+# holds two: split it), and a command line is flags and calls of the public API (past 250 lines logic has
+# crept in: move it into jaxbridge.api).
+MAX_MODULE_LINES, MAX_SCRIPT_LINES = 500, 250
+SCRIPTS = ("train.py", "eval.py")
 
 
 def floor(module: str) -> int | None:
@@ -45,10 +49,11 @@ def test_every_import_points_down_a_floor():
     assert not upward, upward
 
 
-def test_no_module_is_longer_than_about_400_lines():
-    long = {name: n for name, path in modules() if (n := len(path.read_text().splitlines())) > MAX_LINES}
-    long |= {p.name: n for p in (ROOT / "train.py", ROOT / "eval.py") if (n := len(p.read_text().splitlines())) > 200}
-    assert not long, long
+def test_no_module_outgrows_its_cap():
+    lines = lambda path: len(path.read_text().splitlines())
+    long = {name: n for name, path in modules() if (n := lines(path)) > MAX_MODULE_LINES}
+    long |= {script: n for script in SCRIPTS if (n := lines(ROOT / script)) > MAX_SCRIPT_LINES}
+    assert not long, f"split these (caps: {MAX_MODULE_LINES} lines a module, {MAX_SCRIPT_LINES} a script): {long}"
 
 
 def test_the_command_lines_call_only_the_public_api():
@@ -57,7 +62,7 @@ def test_the_command_lines_call_only_the_public_api():
     use from the root is in its __all__."""
     import jaxbridge
 
-    for script in (ROOT / "train.py", ROOT / "eval.py"):
+    for script in (ROOT / name for name in SCRIPTS):
         tree = ast.parse(script.read_text())
         inside = {name for name in imported(script) if name.split(".")[0] in PACKAGES}
         assert inside <= {"jaxbridge"} | {n for n in inside if n.startswith("jaxbridge.utils")}, (script.name, inside)

@@ -99,26 +99,61 @@ def test_a_non_finite_q_function_stops_the_run_and_keeps_the_last_good_checkpoin
     assert {r["cycle"] for r in rows} == {"1", "2"}  # the files cover the good cycles only
 
 
-def test_checkpoints_saved_at_once_from_two_threads_all_complete(tmp_path):
+def test_a_save_started_while_another_is_inside_orbax_waits_for_it(tmp_path, monkeypatch):
     """Approaches train in worker threads and checkpoint whenever their cycles end; orbax's save is not
     safe to run twice at once in one process (without the lock in checkpoint.save, one of two
-    concurrent saves failed at once here, and in a real run both hung for 300 s)."""
-    state, errors = {"w": jnp.ones((64, 32))}, []
+    concurrent saves failed at once here, and in a real run both hung for 300 s). The second save is
+    started while the first is held inside orbax's part, and held there until the second has found the
+    lock taken; without the lock it walks in beside the first, which is recorded and fails the test."""
+    state, errors, overlaps, inside = {"w": jnp.ones((64, 32))}, [], [], []
+    first_inside, second_waits = threading.Event(), threading.Event()
+    real_save, real_lock = checkpoint._save, checkpoint._SAVING
 
-    def keep_saving(name):
+    class WatchedLock:  # checkpoint.save's lock, saying when the second save finds it held
+        def __enter__(self):
+            if not real_lock.acquire(blocking=False):
+                if threading.current_thread().name == "second":
+                    second_waits.set()
+                real_lock.acquire()
+
+        def __exit__(self, *exc):
+            real_lock.release()
+
+    def watched_save(directory, step, state, record):
+        if inside:  # a save beside another: what the lock prevents
+            overlaps.append((inside[0], directory.name))
+            second_waits.set()
+            raise RuntimeError("two saves at once")
+        inside.append(directory.name)
         try:
-            for step in range(1, 11):
-                checkpoint.save(tmp_path / name, step, state, {"cycle": step})
+            if directory.name == "first":
+                first_inside.set()
+                assert second_waits.wait(timeout=120), "the second save never tried to start"
+            real_save(directory, step, state, record)
+        finally:
+            inside.pop()
+
+    monkeypatch.setattr(checkpoint, "_SAVING", WatchedLock())
+    monkeypatch.setattr(checkpoint, "_save", watched_save)
+
+    def save(name):
+        try:
+            checkpoint.save(tmp_path / name, 1, state, {"cycle": 1})
         except Exception as err:  # noqa: BLE001 - reported below
             errors.append(err)
 
-    threads = [threading.Thread(target=keep_saving, args=(name,), daemon=True) for name in ("a", "b")]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join(timeout=120)
-    assert not any(t.is_alive() for t in threads) and errors == []
-    assert checkpoint.sealed_steps(tmp_path / "a") == checkpoint.sealed_steps(tmp_path / "b") == [9, 10]
+    first, second = (threading.Thread(target=save, args=(name,), name=name, daemon=True)
+                     for name in ("first", "second"))
+    first.start()
+    assert first_inside.wait(timeout=120)
+    second.start()
+    for t in (first, second):
+        t.join(timeout=240)
+    assert not first.is_alive() and not second.is_alive()
+    assert second_waits.is_set() and overlaps == [] and errors == [], (overlaps, errors)
+    for name in ("first", "second"):
+        assert checkpoint.sealed_steps(tmp_path / name) == [1]
+        checkpoint.verify(tmp_path / name, 1)
 
 
 def test_a_step_orbax_will_delete_is_unsealed_before_the_save_that_deletes_it(tmp_path, monkeypatch):
