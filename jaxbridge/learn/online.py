@@ -22,7 +22,7 @@ from jaxbridge.core.tasks import TaskArrays
 from jaxbridge.learn.approaches import BridgeKind
 from jaxbridge.learn.devices import SeedMesh
 from jaxbridge.learn.hyper import Hyper
-from jaxbridge.learn.learner import epsilon
+from jaxbridge.learn.learner import QLearner, epsilon
 from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.learn.setup import Setup, seed_keys
 from jaxbridge.learn.transitions import episode_transitions
@@ -49,6 +49,14 @@ def _repeat(params, n: int):
     return jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), params)
 
 
+def bridge_params(learning: QLearner, params: Any, eps: jax.Array, n: int) -> QBridgeParams:
+    """The Q bridge's parameters for n episodes of one seed: its network `params` given once (a learner
+    whose rollouts share it) or a copy per episode, with the exploration rate `eps`."""
+    if learning.shares_network:
+        return QBridgeParams(q=params, epsilon=eps)
+    return QBridgeParams(q=_repeat(params, n), epsilon=jnp.full(n, eps, jnp.float32))
+
+
 def _by_seed(tree, seeds: int):
     """Seed-major batch [seeds * n, ...] -> [seeds, n, ...]."""
     return jax.tree.map(lambda x: jnp.reshape(x, (seeds, -1) + x.shape[1:]), tree)
@@ -68,18 +76,13 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     shared = learning.shares_network  # one copy of the seed's network for its episodes, or one each
     config.check_buffer_fits()
 
-    def bridge_params(params, eps: jax.Array, n: int) -> QBridgeParams:
-        if shared:
-            return QBridgeParams(q=params, epsilon=eps)
-        return QBridgeParams(q=_repeat(params, n), epsilon=jnp.full(n, eps, jnp.float32))
-
     def seed_cycle(learner: Any, train_tasks: TaskArrays, test_tasks: TaskArrays,
                    hyper: Hyper) -> tuple[Any, CycleMetrics]:
         k_next, k_train, k_learn, k_test = jax.random.split(learner.key, 4)
 
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
         eps = epsilon(hyper, learner.decisions)
-        explore = bridge_params(learning.greedy(learner), eps, episodes)
+        explore = bridge_params(learning, learning.greedy(learner), eps, episodes)
         result, records = rollout(train_env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
                                   config.train_steps, record=approach.learns, controls=controls, shared_params=shared,
                                   host_planner=host_planner)
@@ -102,7 +105,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
         learner = learner.replace(key=k_next)
 
         # 4. Greedy evaluation on the seed's test tasks.
-        greedy = bridge_params(learning.greedy(learner), jnp.float32(0.0), num_tests)
+        greedy = bridge_params(learning, learning.greedy(learner), jnp.float32(0.0), num_tests)
         tested, _ = rollout(test_env, test_bridge, greedy, test_tasks, jax.random.split(k_test, num_tests),
                             test.max_steps, controls=controls, shared_params=shared, host_planner=host_planner)
 

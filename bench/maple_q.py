@@ -1,0 +1,168 @@
+"""Where Maple Q's cycle goes, beside ours': one seed on one device, each part of its cycle timed alone,
+into docs/results/ENV/maple_q_profile.json.
+
+    python -m bench.maple_q [--env doorknobs] [--approaches ours,maple_q] [--warmup 5] [--repeats 3]
+
+Per approach, after --warmup cycles of the run's own Cycle (as train.py calls it, one seed, one device):
+what the bridge sees and the replay buffer keeps (the observation's width, the stored entries, bytes per seed);
+per cycle (mean over the warm-up cycles after the first): the training episodes' env steps and bridge decisions,
+and the test episodes' env steps, bridge decisions (of the timed test rollout) and horizon; milliseconds per
+cycle of each part, jitted alone on the learner after the warm-up (training rollout, its transitions into the
+buffer, `learn`: relabelling and updates, test rollout), of the whole per-seed cycle jitted alone, and of the
+Cycle call (the seed map, the check for plan-table misses: the host side) over the warm-up cycles after the
+first; microseconds per minibatch update of `learn`, and bench.update_parts's parts (its buffer fill).
+Each time is the median of --repeats calls. Prints the figures as JSON, with each approach's ratio to the
+first's. The parts run outside the cycle's program, so their sum need not be the whole per-seed cycle.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from bench.records import DIRTY_RECORDS, RECORDS, ROOT, check_clean, git_commit, machine, shown
+from bench.update_parts import measure as update_parts
+from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.meta_policy import rollout
+from jaxbridge.learn.devices import SeedMesh, select_devices
+from jaxbridge.learn.hyper import Hyper
+from jaxbridge.learn.learner import epsilon
+from jaxbridge.learn.online import Cycle, bridge_params, make_seed_cycle
+from jaxbridge.learn.setup import Setup, make_setup
+from jaxbridge.learn.transitions import episode_transitions
+
+
+def median_ms(fn, *args, repeats: int) -> float:
+    """Milliseconds of a call of the jitted `fn(*args)`, the median of `repeats` after a compiling call."""
+    jax.block_until_ready(fn(*args))
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        jax.block_until_ready(fn(*args))
+        times.append(time.perf_counter() - start)
+    return 1e3 * statistics.median(times)
+
+
+def warm_up(setup: Setup, cycles: int) -> tuple[object, list, list[float]]:
+    """`cycles` cycles of the run's Cycle on its one seed: (the seed's learner after them, each cycle's
+    metrics, each cycle's wall seconds)."""
+    seeds = SeedMesh(1, tuple(select_devices(1)), setup.config.seed_block)
+    cycle, learners = Cycle(setup, seeds), seeds.place(setup.init_learners())
+    metrics, times = [], []
+    for _ in range(cycles):
+        start = time.perf_counter()
+        learners, out = cycle(learners)
+        jax.block_until_ready(learners)
+        times.append(time.perf_counter() - start)
+        metrics.append(jax.tree.map(lambda x: float(np.asarray(x)[0]), seeds.unpad(out)))
+    return jax.tree.map(lambda x: x[0], seeds.unpad(learners)), metrics, times
+
+
+def cycle_parts(setup: Setup, learner, repeats: int) -> tuple[dict, dict]:
+    """(milliseconds of each part of the seed's cycle, jitted alone from `learner`; the test rollout's
+    bridge decisions). The parts call what `online.make_seed_cycle` calls, with its arguments."""
+    config, learning, controls = setup.config, setup.learner, setup.controls
+    train, test, hyper = setup.train.arrays, setup.test.arrays, Hyper.of(config)  # one seed: its tasks alone
+    episodes, shared = config.episodes_per_cycle, learning.shares_network
+    keys = lambda n: jax.random.split(learner.key, n)
+
+    @jax.jit
+    def train_rollout(learner):
+        explore = bridge_params(learning, learning.greedy(learner), epsilon(hyper, learner.decisions), episodes)
+        return rollout(setup.train_env, setup.bridge(setup.train_env), explore, train, keys(episodes), config.train_steps,
+                       record=True, controls=controls, shared_params=shared, host_planner=False)
+
+    @jax.jit
+    def observe(learner, result, records):
+        transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None, None, None))(
+            records, result.success, setup.train_env.num_skills, hyper.call_planner_bonus, config.counts_steps,
+            controls.plan_progress)
+        return learning.observe(hyper, learner, transitions, valid)
+
+    @jax.jit
+    def test_rollout(learner):
+        greedy = bridge_params(learning, learning.greedy(learner), jnp.float32(0.0), config.num_test_tasks)
+        return rollout(setup.test_env, setup.bridge(setup.test_env), greedy, test, keys(config.num_test_tasks),
+                       setup.test.max_steps, controls=controls, shared_params=shared, host_planner=False)[0]
+
+    learn = jax.jit(lambda learner: learning.learn(hyper, learner, jnp.int32(1), train.tasks))
+    seed_cycle = jax.jit(make_seed_cycle(setup, host_planner=False))
+    result, records = train_rollout(learner)
+    ms = {"train_rollout": median_ms(train_rollout, learner, repeats=repeats),
+          "observe": median_ms(observe, learner, result, records, repeats=repeats),
+          "learn": median_ms(learn, learner, repeats=repeats),
+          "test_rollout": median_ms(test_rollout, learner, repeats=repeats)}
+    ms["parts_sum"] = sum(ms.values())
+    ms["seed_cycle"] = median_ms(seed_cycle, learner, train, test, hyper, repeats=repeats)
+    return ms, {"test_decisions": int(test_rollout(learner).bridge_decisions.sum())}
+
+
+def profile(env: str, approach: str, warmup: int, repeats: int, fill: int) -> dict:
+    """One approach's figures on `env` (seed 0)."""
+    config = TrainConfig.for_env(env, approach=approach, num_seeds=1)
+    setup = make_setup(config)
+    learning = setup.learner
+    learner, metrics, cycle_s = warm_up(setup, warmup)
+    ms, tested = cycle_parts(setup, learner, repeats)
+    ms["cycle_call"] = 1e3 * statistics.median(cycle_s[1:])  # the first compiles
+    mean = lambda field: round(float(np.mean([getattr(m, field) for m in metrics[1:]])), 2)
+    buffer = getattr(learner, "buffer", None)
+    return {
+        "observation": {"width": learning.num_features, "stored": getattr(learning, "stored_features", None)},
+        "buffer": None if buffer is None else {
+            "capacity": buffer.capacity, "bytes_per_seed": sum(x.nbytes for x in jax.tree.leaves(buffer.data)),
+            "filled_after_warmup": int(buffer.size)},
+        "per_cycle": {"train_episodes": config.episodes_per_cycle, "train_steps_each": config.train_steps,
+                      "train_env_steps": mean("train_env_steps"), "train_decisions": mean("train_decisions"),
+                      "test_tasks": config.num_test_tasks, "test_horizon": setup.test.max_steps,
+                      "test_env_steps": mean("test_env_steps"), "test_decisions": tested["test_decisions"],
+                      "test_solve_rate": mean("test_solve_rate"), "table_misses": mean("table_misses")},
+        "ms": {k: round(v, 1) for k, v in ms.items()},
+        "updates_per_cycle": config.updates_per_cycle,
+        "learn_us_per_update": round(1e3 * ms["learn"] / max(config.updates_per_cycle, 1), 1),
+        "update_parts_us": {k: round(v, 1) for k, v in update_parts(env, approach, fill, config.updates_per_cycle).items()},
+    }
+
+
+def with_ratios(figures: dict) -> dict:
+    """Each approach's milliseconds and microseconds per update as a ratio to the first approach's."""
+    first = next(iter(figures.values()))
+    return {name: {key: round(value / first["ms"][key], 2) for key, value in f["ms"].items()}
+            | {"learn_us_per_update": round(f["learn_us_per_update"] / first["learn_us_per_update"], 2)}
+            for name, f in list(figures.items())[1:]}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.maple_q", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="doorknobs", help="environment (default: %(default)s)")
+    parser.add_argument("--approaches", default="ours,maple_q", help="comma-separated, the first the reference "
+                        "(default: %(default)s)")
+    parser.add_argument("--warmup", type=int, default=5, help="cycles before the parts are timed (default: %(default)s)")
+    parser.add_argument("--repeats", type=int, default=3, help="timed calls per part (default: %(default)s)")
+    parser.add_argument("--fill", type=int, default=16384, help="bench.update_parts's buffer fill (default: %(default)s)")
+    parser.add_argument("--allow-dirty", action="store_true",
+                        help=f"profile code with uncommitted changes: the record goes to {DIRTY_RECORDS.relative_to(ROOT)}/, not docs/")
+    args = parser.parse_args(argv)
+    changed = check_clean("bench.maple_q", args.allow_dirty)
+    figures = {a: profile(args.env, a, args.warmup, args.repeats, args.fill) for a in args.approaches.split(",")}
+    record = {"env": args.env, "seed": 0, "figures": figures, "ratio_to_first": with_ratios(figures),
+              "commit": git_commit(check_clean("bench.maple_q", args.allow_dirty, during=True)),
+              "command": "python -m bench.maple_q " + " ".join(argv if argv is not None else sys.argv[1:]),
+              "machine": machine()}
+    print(json.dumps(record, indent=2))
+    path = (DIRTY_RECORDS if changed else RECORDS) / args.env / "maple_q_profile.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(record, indent=2) + "\n")
+    print(f"bench.maple_q: -> {shown(path)}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
