@@ -109,7 +109,7 @@ def main() -> None:
     print("|---" * (len(columns) + 1) + "|")
     for approach in args.approaches.split(","):
         # The full-state ablations twice: their task-constant entries split off (the default), and whole.
-        splits = (True, False) if get_approach(approach).controls.full_state else (True,)
+        splits = (True, False) if get_approach(approach).controls.observation.whole_state else (True,)
         for split in splits:
             row = measure(args.env, approach, args.fill, args.updates, split)
             label = approach + ("" if len(splits) == 1 else " (split)" if split else " (whole)")

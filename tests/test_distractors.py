@@ -9,7 +9,7 @@ import pytest
 from envs_jax import Coffee, CoffeeDistractor, LightSwitchDoor
 from envs_jax.coffee.distractor import with_decoy
 from envs_jax.light_switch_door.env import LightSwitchDoorTask
-from jaxbridge.core.episode import closest_object, closest_object_features, closest_object_width
+from jaxbridge.core.observations import closest_object, closest_object_features, closest_object_width
 from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.tasks import make_batch
 

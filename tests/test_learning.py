@@ -20,6 +20,7 @@ from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.dqn import init_learner, learn, make_dqn, minibatch_indices, td_targets
 from jaxbridge.learn.learner import epsilon
 from jaxbridge.core.meta_policy import Controls, rollout
+from jaxbridge.core.observations import FULL_STATE
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.smoothing import smooth
@@ -253,7 +254,7 @@ def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap
     chunk = 8
     monkeypatch.setattr(dqn, "RELABEL_CHUNK", chunk)
     batch = evaluation_batch(LightSwitchDoor, [0, 1], 4)
-    controls = Controls(full_state=True)  # the full state: every decision's observation differs
+    controls = Controls(observation=FULL_STATE)  # the full state: every decision's observation differs
     result, rec = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
                           jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True,
                           controls=controls)
@@ -486,7 +487,7 @@ def test_rollouts_take_one_shared_network_as_they_take_a_copy_per_episode():
     net = QNetwork((32, 32))
     params = net.init(jax.random.key(0), jnp.zeros((1, input_size(batch.env, batch.env.full_state_size))))
     bridge, keys, n = QBridge(batch.env, net, 10), jax.random.split(jax.random.key(1), batch.size), batch.size
-    controls = Controls(full_state=True)
+    controls = Controls(observation=FULL_STATE)
     copies = QBridgeParams(q=jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), params), epsilon=jnp.ones(n))
     each, _ = rollout(batch.env, bridge, copies, batch.arrays, keys, batch.max_steps, controls=controls)
     shared, _ = rollout(batch.env, bridge, QBridgeParams(q=params, epsilon=jnp.float32(1.0)), batch.arrays, keys,

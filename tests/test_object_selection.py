@@ -7,7 +7,7 @@ import pytest
 
 from envs_jax import env_class
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.episode import object_tokens, token_slots, token_width
+from jaxbridge.core.observations import object_tokens, token_slots, token_width
 from jaxbridge.learn.dqn import q_network
 from jaxbridge.learn.object_q import attention
 from jaxbridge.learn.q_bridge import encode

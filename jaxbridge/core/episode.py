@@ -6,11 +6,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import jax
-import jax.numpy as jnp
-import numpy as np
 from flax import struct
 
-from envs_jax.base import POSITION_DIM, NoveltyEnv, Objects, SkillCall
+from envs_jax.base import NoveltyEnv, SkillCall
+from jaxbridge.core.observations import FEATURES, Observation
 
 PLANNER, BRIDGE = 0, 1  # who is in control of an episode
 
@@ -24,7 +23,9 @@ class Controls:
 
     planner: bool = True  # False: pure RL, the bridge acts from the first step and nothing plans
     call_planner: bool = True  # False: no CallPlanner; once stuck, the bridge keeps control
-    full_state: bool = False  # the bridge sees every object's raw features instead of the selected ones
+    # What the bridge sees (core/observations.py): the env's hand-made features (the paper's selection),
+    # every object's raw features (FULL_STATE), the closest object's read off the object view, or tokens.
+    observation: Observation = FEATURES
     loop_guard: bool = False  # a skill that left the state unchanged is not applicable again in that state
     low_level: bool = False  # the bridge emits the env's raw action each step instead of a skill (brax baselines)
     # The plan-repair baselines (issue 38, docs/DESIGN.md): the bridge's problem ends once the abstract
@@ -32,86 +33,16 @@ class Controls:
     # the planner, which replans, or with `resume_plan` continues that plan from the state reached.
     plan_progress: bool = False
     resume_plan: bool = False
-    # The learned object selector (issue 37): the bridge sees every object of the state as a token and
-    # learns which matters; nothing says which object was closest where it got stuck.
-    objects: bool = False
-    # The paper's selection rule read off the object view (`closest_object_features`), in place of the
-    # env's own `features`.
-    closest_object: bool = False
-
-
-def token_width(env: NoveltyEnv) -> int:
-    """An object token's length: one-hot type, features, position relative to the robot, interactable."""
-    return len(env.object_types) + env.object_width + POSITION_DIM + 1
-
-
-def token_position(env: NoveltyEnv) -> tuple[int, int]:
-    """(start, end): where a token's relative position lies (after its one-hot type and features)."""
-    start = len(env.object_types) + env.object_width
-    return start, start + POSITION_DIM
-
-
-def relative_to_robot(position: jax.Array, robot: jax.Array) -> jax.Array:
-    """Offsets from the robot squashed to (-1, 1) per axis, d / (1 + |d|): exact near the robot, bounded
-    far away, so a larger test task's distances are not beyond the training task's."""
-    offset = position - robot
-    return offset / (1.0 + jnp.abs(offset))
-
-
-def closest_object(objects: Objects) -> tuple[jax.Array, jax.Array]:
-    """The paper's feature selection: the slot of the interactable object closest to the robot (ties: the
-    lowest slot), and whether there is one."""
-    distance = jnp.linalg.norm(objects.position - objects.position[0], axis=-1)
-    return jnp.argmin(jnp.where(objects.interactable, distance, jnp.inf)), jnp.any(objects.interactable)
-
-
-def closest_object_width(env: NoveltyEnv) -> int:
-    return 1 + env.object_width + 2 * POSITION_DIM
-
-
-def closest_object_features(env: NoveltyEnv, state: Any, stuck_state: Any) -> jax.Array:
-    """float32[1 + W + 6]: the paper's selection as one function of the object view. The object is chosen
-    in the stuck state and read in this one: a flag that there is one, its features and its position
-    relative to the robot (zeros without one), then how far the robot has moved since it got stuck."""
-    then, now = env.objects(stuck_state), env.objects(state)
-    slot, found = closest_object(then)
-    chosen = jnp.concatenate([now.features[slot], relative_to_robot(now.position[slot], now.position[0])])
-    moved = relative_to_robot(now.position[0], then.position[0])
-    return jnp.concatenate([found[None].astype(jnp.float32), jnp.where(found, chosen, 0.0), moved])
-
-
-def token_slots(env: NoveltyEnv) -> np.ndarray:
-    """The slots that become tokens: the robot's and every one a skill may act on (the paper's candidates
-    for its selection); cells, rooms and the like only cost attention."""
-    return np.r_[0, env.candidate_slots]
-
-
-def object_tokens(env: NoveltyEnv, state: Any) -> jax.Array:
-    """float32[T * token_width]: the object view's `token_slots` as tokens, the robot first; a masked-out
-    slot is zeros. Positions are `relative_to_robot`."""
-    objects = jax.tree.map(lambda x: x[token_slots(env)], env.objects(state))
-    kind = jax.nn.one_hot(objects.type_id, len(env.object_types)) * objects.mask[:, None]
-    relative = relative_to_robot(objects.position, objects.position[0]) * objects.mask[:, None]
-    tokens = jnp.concatenate([kind, objects.features, relative, objects.interactable[:, None].astype(jnp.float32)], -1)
-    return tokens.reshape(-1)
 
 
 def observation_size(env: NoveltyEnv, controls: Controls) -> int:
-    if controls.objects:
-        return len(token_slots(env)) * token_width(env)
-    if controls.closest_object:
-        return closest_object_width(env)
-    return env.full_state_size if controls.full_state else env.num_features
+    return controls.observation.size(env)
 
 
 def observation(env: NoveltyEnv, controls: Controls, state: Any, stuck_state: Any) -> jax.Array:
-    """What the bridge sees: the env's object-centric features, the closest object's by the paper's rule,
-    the full padded state, or the object tokens."""
-    if controls.objects:
-        return object_tokens(env, state)
-    if controls.closest_object:
-        return closest_object_features(env, state, stuck_state)
-    return env.full_state(state) if controls.full_state else env.features(state, stuck_state)
+    """What the bridge sees (core/observations.py): the env's object-centric features, the full padded
+    state, the closest object's by the paper's rule, or the object tokens."""
+    return controls.observation.observe(env, state, stuck_state)
 
 
 @struct.dataclass

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.bridges import Bridge, PurePlanningBridge, RandomBridge
 from jaxbridge.core.episode import Controls, observation_size
+from jaxbridge.core.observations import CLOSEST_OBJECT, FEATURES, FULL_STATE, OBJECT_TOKENS
 from jaxbridge.learn.q_bridge import QBridge, QNetwork
 
 
@@ -61,7 +62,7 @@ class Approach:
 APPROACHES = {a.name: a for a in (
     Approach("ours", "ours", BridgeKind.Q, Controls(),
              "bridge policy learning: object-centric features, CallPlanner"),
-    Approach("no_feature_selection", "no feature selection", BridgeKind.Q, Controls(full_state=True),
+    Approach("no_feature_selection", "no feature selection", BridgeKind.Q, Controls(observation=FULL_STATE),
              "the bridge sees every object's raw features, padded to the env's largest task"),
     Approach("no_callplanner", "no CallPlanner", BridgeKind.Q, Controls(call_planner=False),
              "no CallPlanner action: once stuck, the bridge keeps control for the episode"),
@@ -69,7 +70,7 @@ APPROACHES = {a.name: a for a in (
              "a uniformly random applicable action (CallPlanner included) whenever stuck; no learning"),
     Approach("pure_planning", "pure planning", BridgeKind.NONE, Controls(),
              "the planner alone, re-planning whenever stuck; no learning"),
-    Approach("maple_q", "Maple Q (pure RL)", BridgeKind.Q, Controls(planner=False, call_planner=False, full_state=True),
+    Approach("maple_q", "Maple Q (pure RL)", BridgeKind.Q, Controls(planner=False, call_planner=False, observation=FULL_STATE),
              "pure RL, no planner: full state, actions grounded on each task's objects"),
 )}
 
@@ -79,7 +80,8 @@ APPROACHES = {a.name: a for a in (
 # full state instead. Not among "all".
 LOW_LEVEL = {a.name: a for a in (
     Approach(f"low_level_{algorithm}{suffix}", f"low-level {algorithm.upper()}{label}", BridgeKind.LOW_LEVEL,
-             Controls(call_planner=suffix == "_callplanner", full_state=suffix == "_full_state", low_level=True),
+             Controls(call_planner=suffix == "_callplanner", low_level=True,
+                      observation=FULL_STATE if suffix == "_full_state" else FEATURES),
              f"brax {algorithm.upper()} from the stuck state on the env's raw actions{what}", algorithm)
     for algorithm in ("ppo", "sac")
     for suffix, label, what in (("", "", ""),
@@ -102,10 +104,10 @@ PLAN_REPAIR = {a.name: a for a in (
 # being shown the closest one's features (learn/object_q.py), and the paper's rule as one function of
 # the object view, the same for every env, to compare it with. Not among "all".
 SELECTION = {a.name: a for a in (
-    Approach("ours_closest_object", "ours, closest object", BridgeKind.Q, Controls(closest_object=True),
+    Approach("ours_closest_object", "ours, closest object", BridgeKind.Q, Controls(observation=CLOSEST_OBJECT),
              "ours with the paper's selection read off the object view: the interactable object closest to the "
              "robot where it got stuck"),
-    Approach("ours_learned_selection", "ours, learned selection", BridgeKind.Q, Controls(objects=True),
+    Approach("ours_learned_selection", "ours, learned selection", BridgeKind.Q, Controls(observation=OBJECT_TOKENS),
              "ours with every object of the state as a token, attention choosing which matters; no hand-made selection"),
 )}
 

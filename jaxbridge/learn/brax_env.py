@@ -24,6 +24,7 @@ import jax.numpy as jnp
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv
 from jaxbridge.core.meta_policy import (Controls, PlannerTurn, bridge_step, observation, observation_size,
                                         planner_step, start_episode, step_randomness)
+from jaxbridge.core.observations import FEATURES, FULL_STATE
 from jaxbridge.core.tasks import TaskArrays
 
 with contextlib.redirect_stdout(io.StringIO()):  # brax prints its optional GPU backends' failed imports
@@ -31,7 +32,7 @@ with contextlib.redirect_stdout(io.StringIO()):  # brax prints its optional GPU 
 
 
 def low_level_controls(call_planner: bool, full_state: bool = False) -> Controls:
-    return Controls(call_planner=call_planner, full_state=full_state, low_level=True)
+    return Controls(call_planner=call_planner, low_level=True, observation=FULL_STATE if full_state else FEATURES)
 
 
 def agent_action_size(env: NoveltyEnv, call_planner: bool) -> int:

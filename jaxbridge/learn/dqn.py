@@ -13,7 +13,7 @@ from flax import struct
 
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import Normalise, ParamSamples, PolyakPer, TargetInit, TrainConfig
-from jaxbridge.core.episode import token_position, token_width
+from jaxbridge.core.observations import token_position, token_width
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.object_q import ObjectQNetwork
@@ -107,7 +107,7 @@ class DQN:
 
 def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork:
     """The approach's Q-network: over its observation vector, or over object tokens (learned selection)."""
-    if not get_approach(config.approach).controls.objects:
+    if not get_approach(config.approach).controls.observation.tokens:
         return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
                         normalise=config.normalise is Normalise.MINMAX)
     if config.normalise is not Normalise.NONE:

@@ -2,7 +2,7 @@
 
 The paper selects the features by hand, those of the interactable object closest to the robot where it
 got stuck, and names learning that selection as the first thing to try. Here the observation is every
-object of the state as a token (`core.episode.object_tokens`: one-hot type, features, position
+object of the state as a token (`core.observations.object_tokens`: one-hot type, features, position
 relative to the robot, interactable); the robot's token asks, by attention, which interactable object
 to look at, and the Q-value is an MLP of (robot, attended object, action). Any number of objects, in
 any order: the same parameters serve the training task's few and the test tasks' many.

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import jax
 import numpy as np
 
-from jaxbridge.core.episode import token_slots
+from jaxbridge.core.observations import token_slots
 from jaxbridge.core.tasks import TaskBatch
 from jaxbridge.learn.object_q import ObjectQNetwork, attention
 from jaxbridge.run.evaluate import TrainedPolicy, batch_rollout

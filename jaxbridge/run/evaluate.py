@@ -110,7 +110,7 @@ class TrainedPolicy:
     def can_see(self, env) -> bool:
         """False where the approach's input cannot hold the env's tasks (the full-state ablations are
         sized to the largest test task)."""
-        return env.full_state_fits or not self.approach.controls.full_state
+        return env.full_state_fits or not self.approach.controls.observation.whole_state
 
     def on(self, batch: TaskBatch) -> tuple[Bridge, Any, Controls]:
         """(bridge, per-episode greedy params, controls) for the batch: each episode gets its seed's network."""

@@ -48,7 +48,7 @@ def _recorded_rollout(env, bridge, drawer, params, batch, keys, max_steps, contr
     xy, door_open, details = jax.vmap(jax.vmap(per_state))(records.env_state)  # [T, B, ...]
     per_step = (records.actor, records.skill, records.slot, records.param, records.decided)
     seen = None
-    if controls.objects:  # object tokens, what a learned selector attends to, and each object slot's type
+    if controls.observation.tokens:  # object tokens, what a learned selector attends to, and each object slot's type
         seen = (records.features, env.objects(jax.tree.map(lambda x: x[0, 0], records.env_state)).type_id)
     return result, per_step, (xy, door_open, details), seen
 

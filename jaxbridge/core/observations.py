@@ -1,0 +1,109 @@
+"""What the bridge sees: one kind of observation per approach (`Controls.observation`), each a small
+value with its width on an env and the function that makes it from the current and the stuck state.
+
+The built-in kinds: the env's hand-made `features` (the paper's selection, per env), the `full_state`
+(every object's raw features, padded), the paper's rule read off the object view (`closest_object`) and
+every candidate object as a token (`object_tokens`, for the learned selector). A new kind is one
+`Observation` and one `register` call (its name must be new)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from envs_jax.base import POSITION_DIM, NoveltyEnv, Objects
+
+
+@dataclass(frozen=True, eq=False)  # compared by identity: one value per kind, a static part of the controls
+class Observation:
+    name: str
+    size: Callable[[NoveltyEnv], int]
+    """Its length on `env` (the network's input width)."""
+    observe: Callable[[NoveltyEnv, Any, Any], jax.Array]
+    """float32[size(env)] from (env, state, stuck_state): the state at which control last passed to the bridge."""
+    whole_state: bool = False
+    """The env's whole padded state: its task-constant entries can be stored once per task (learn/q_bridge)."""
+    tokens: bool = False
+    """Object tokens: the network attends over them (learn/object_q.py)."""
+
+
+def token_width(env: NoveltyEnv) -> int:
+    """An object token's length: one-hot type, features, position relative to the robot, interactable."""
+    return len(env.object_types) + env.object_width + POSITION_DIM + 1
+
+
+def token_position(env: NoveltyEnv) -> tuple[int, int]:
+    """(start, end): where a token's relative position lies (after its one-hot type and features)."""
+    start = len(env.object_types) + env.object_width
+    return start, start + POSITION_DIM
+
+
+def relative_to_robot(position: jax.Array, robot: jax.Array) -> jax.Array:
+    """Offsets from the robot squashed to (-1, 1) per axis, d / (1 + |d|): exact near the robot, bounded
+    far away, so a larger test task's distances are not beyond the training task's."""
+    offset = position - robot
+    return offset / (1.0 + jnp.abs(offset))
+
+
+def closest_object(objects: Objects) -> tuple[jax.Array, jax.Array]:
+    """The paper's feature selection: the slot of the interactable object closest to the robot (ties: the
+    lowest slot), and whether there is one."""
+    distance = jnp.linalg.norm(objects.position - objects.position[0], axis=-1)
+    return jnp.argmin(jnp.where(objects.interactable, distance, jnp.inf)), jnp.any(objects.interactable)
+
+
+def closest_object_width(env: NoveltyEnv) -> int:
+    return 1 + env.object_width + 2 * POSITION_DIM
+
+
+def closest_object_features(env: NoveltyEnv, state: Any, stuck_state: Any) -> jax.Array:
+    """float32[1 + W + 6]: the paper's selection as one function of the object view. The object is chosen
+    in the stuck state and read in this one: a flag that there is one, its features and its position
+    relative to the robot (zeros without one), then how far the robot has moved since it got stuck."""
+    then, now = env.objects(stuck_state), env.objects(state)
+    slot, found = closest_object(then)
+    chosen = jnp.concatenate([now.features[slot], relative_to_robot(now.position[slot], now.position[0])])
+    moved = relative_to_robot(now.position[0], then.position[0])
+    return jnp.concatenate([found[None].astype(jnp.float32), jnp.where(found, chosen, 0.0), moved])
+
+
+def token_slots(env: NoveltyEnv) -> np.ndarray:
+    """The slots that become tokens: the robot's and every one a skill may act on (the paper's candidates
+    for its selection); cells, rooms and the like only cost attention."""
+    return np.r_[0, env.candidate_slots]
+
+
+def object_tokens(env: NoveltyEnv, state: Any) -> jax.Array:
+    """float32[T * token_width]: the object view's `token_slots` as tokens, the robot first; a masked-out
+    slot is zeros. Positions are `relative_to_robot`."""
+    objects = jax.tree.map(lambda x: x[token_slots(env)], env.objects(state))
+    kind = jax.nn.one_hot(objects.type_id, len(env.object_types)) * objects.mask[:, None]
+    relative = relative_to_robot(objects.position, objects.position[0]) * objects.mask[:, None]
+    tokens = jnp.concatenate([kind, objects.features, relative, objects.interactable[:, None].astype(jnp.float32)], -1)
+    return tokens.reshape(-1)
+
+
+FEATURES = Observation("features", lambda env: env.num_features,
+                       lambda env, state, stuck_state: env.features(state, stuck_state))
+FULL_STATE = Observation("full_state", lambda env: env.full_state_size,
+                         lambda env, state, stuck_state: env.full_state(state), whole_state=True)
+CLOSEST_OBJECT = Observation("closest_object", closest_object_width, closest_object_features)
+OBJECT_TOKENS = Observation("object_tokens", lambda env: len(token_slots(env)) * token_width(env),
+                            lambda env, state, stuck_state: object_tokens(env, state), tokens=True)
+
+OBSERVATIONS: dict[str, Observation] = {}
+
+
+def register(kind: Observation) -> Observation:
+    """Make `kind` known by its name (for approaches declared elsewhere to name it); ValueError if taken."""
+    if OBSERVATIONS.get(kind.name, kind) is not kind:
+        raise ValueError(f"an observation named {kind.name!r} is registered already")
+    OBSERVATIONS[kind.name] = kind
+    return kind
+
+
+for _kind in (FEATURES, FULL_STATE, CLOSEST_OBJECT, OBJECT_TOKENS):
+    register(_kind)
