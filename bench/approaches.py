@@ -22,12 +22,11 @@ from pathlib import Path
 
 import jax
 
+import jaxbridge
 from bench.training import AUTHORS_WHOLE_RUN_S  # one seed-run of "ours", per env (results.md)
 from jaxbridge.learn.approaches import APPROACHES
-from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import describe, device_count_arg, select_devices
 from jaxbridge.learn.devices import default_workers
-from jaxbridge.run.experiments import train_approaches
 
 
 def main() -> None:
@@ -42,13 +41,11 @@ def main() -> None:
     args = parser.parse_args()
     devices = select_devices(args.devices)  # before JAX starts
     names = list(APPROACHES) if args.approaches == "all" else args.approaches.split(",")
-    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles)
     with tempfile.TemporaryDirectory() as tmp:
         out = args.keep or Path(tmp) / args.env
-        out.mkdir(parents=True, exist_ok=True)
         start = time.perf_counter()
-        summaries = train_approaches(config, names, out, progress=False, workers=args.workers,
-                                     devices=devices)
+        summaries = jaxbridge.train(args.env, names, args.num_seeds, args.cycles, out.parent, out.name, workers=args.workers,
+                                    devices=devices).summaries
         total = time.perf_counter() - start
         results = (out / "results.md").read_text()
     print(f"jax {jax.__version__}, each approach's seeds over {describe(devices)} device(s)")

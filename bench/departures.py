@@ -19,13 +19,13 @@ import dataclasses
 import time
 from pathlib import Path
 
+import jaxbridge
 from envs_jax import env_class
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import AUTHORS, preset_values
 from jaxbridge.learn.devices import select_devices
 from jaxbridge.run.artifacts import at_cycle, curve_statistics
 from jaxbridge.run.comparison import read_metrics
-from jaxbridge.run.experiments import train_approaches
 from jaxbridge.utils import stats
 
 FIRST_VALIDATION_SEED = 100
@@ -70,10 +70,12 @@ def train_or_read(config: TrainConfig, experiment: Path, devices: list) -> dict:
     its test solve rates' statistics at CYCLES."""
     done = experiment / "ours" / "metrics.csv"
     finished = done.is_file() and read_metrics(experiment / "ours")["test_solve_rate"].shape[1] == config.cycles
-    if not finished:
-        experiment.mkdir(parents=True, exist_ok=True)
-        started = (experiment / "experiment.json").is_file()
-        train_approaches(config, ["ours"], experiment, progress=False, resume=started, devices=devices)
+    if not finished and (experiment / "experiment.json").is_file():
+        jaxbridge.resume(experiment, devices=devices)
+    elif not finished:  # every field as given: the config is `config` exactly
+        experiment.parent.mkdir(parents=True, exist_ok=True)
+        fields = {f.name: getattr(config, f.name) for f in dataclasses.fields(config) if f.name != "env"}
+        jaxbridge.train(config.env, "ours", out=experiment.parent, name=experiment.name, devices=devices, **fields)
     m = read_metrics(experiment / "ours")
     curve = curve_statistics(m["test_solve_rate"], m["train_success_rate"])["test_solve_rate"]
     return {c: at_cycle(curve, min(c, config.cycles)) for c in CYCLES}

@@ -84,12 +84,13 @@ def trained_whole_and_resumed(setup, directory: Path, crash_at: int) -> tuple[Pa
     import pytest
 
     from jaxbridge.run import rundir
+    from jaxbridge.run.hooks import RunHooks
     from jaxbridge.run.runner import train
 
     whole, crashed = directory / "whole", directory / "crashed"
     for run_dir in (whole, crashed):
         rundir.prepare(run_dir, overwrite=False)
-    train(setup, whole, progress=False)
+    train(setup, whole, RunHooks(progress=False))
 
     def crash(cycle, learners):
         if cycle == crash_at:
@@ -97,6 +98,6 @@ def trained_whole_and_resumed(setup, directory: Path, crash_at: int) -> tuple[Pa
         return learners
 
     with pytest.raises(Crash):
-        train(setup, crashed, progress=False, fault_injection=crash)
-    train(setup, crashed, progress=False, resume=True)
+        train(setup, crashed, RunHooks(progress=False), fault_injection=crash)
+    train(setup, crashed, RunHooks(progress=False), resume=True)
     return whole, crashed

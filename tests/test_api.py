@@ -64,3 +64,27 @@ def test_docs_api_md_documents_every_public_name_and_help_explains_the_calls():
     for name in jaxbridge.__all__:
         assert getattr(jaxbridge, name).__doc__, name
     assert "learning_rate = 0.001" in jaxbridge.TrainConfig.__doc__ and "Adam step size" in jaxbridge.TrainConfig.__doc__
+
+
+def test_a_training_builds_each_programs_setup_once(monkeypatch, tmp_path):
+    """prepare builds the setups; the network check, the learner contract and the training read them (the
+    memory estimate reads one-seed shapes first, so a run too big is refused before its tasks are built)."""
+    from jaxbridge.learn.setup import Setup
+
+    built, init = [], Setup.__init__
+
+    def counted(self, config, *args, **kwargs):
+        built.append((config.approach, config.num_seeds))
+        init(self, config, *args, **kwargs)
+    monkeypatch.setattr(Setup, "__init__", counted)
+    whole = lambda: sorted(approach for approach, seeds in built if seeds == 2)
+    training = jaxbridge.prepare("light_switch_door", ["pure_planning", "random"], seeds=2, cycles=1, out=tmp_path)
+    assert whole() == ["pure_planning", "random"]
+    assert sorted(a for a, seeds in built if seeds == 1) == ["pure_planning", "random"]  # the memory estimate's
+    experiment = training.run()
+    assert whole() == ["pure_planning", "random"] and set(experiment.summaries) == {"pure_planning", "random"}
+    # a sweep over a leaf hyperparameter: one program per approach, one setup each
+    built.clear()
+    jaxbridge.prepare("light_switch_door", ["random"], seeds=2, cycles=1, out=tmp_path, name="sweep",
+                      sweep={"gamma": (0.8, 0.9)}).release()
+    assert whole() == ["random"]

@@ -19,6 +19,7 @@ from jaxbridge.run import checkpoint
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import rundir
+from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.runner import NumericalFault, train
 from run_helpers import start_held, wait_for
 
@@ -93,7 +94,7 @@ def test_a_non_finite_q_function_stops_the_run_and_keeps_the_last_good_checkpoin
         return learners.replace(params=params)
 
     with pytest.raises(NumericalFault, match="cycle 3 in seed 1.*checkpoint is of cycle 2"):
-        train(make_setup(config), run_dir, progress=False, fault_injection=poison)
+        train(make_setup(config), run_dir, RunHooks(progress=False), fault_injection=poison)
     assert checkpoint.sealed_steps(run_dir / "checkpoints") == [1, 2]
     rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
     assert {r["cycle"] for r in rows} == {"1", "2"}  # the files cover the good cycles only

@@ -1,6 +1,6 @@
 """Nothing lost, nobody's files touched: --overwrite and --name, the run lock with two real processes, runs
 too big for memory, damaged manifests, lost checkpoints, one-line flag errors (tests/test_faults.py: Ctrl-C,
-a full disk, a read-only filesystem)."""
+a full disk, a run directory turned read-only)."""
 import json
 import os
 import shutil

@@ -16,6 +16,7 @@ from jaxbridge.core import grid
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint
+from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.runner import train
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -102,7 +103,7 @@ def test_a_two_by_two_sweep_writes_a_run_and_a_row_per_setting(swept):
 def test_each_setting_equals_a_plain_run_with_it_byte_for_byte(swept, tmp_path):
     config = TrainConfig.for_env("light_switch_door", num_seeds=4, cycles=4, updates_per_cycle=30,
                                  checkpoint_every=2, learning_rate=3e-4, epsilon_decay=1e-3)
-    train(make_setup(config), tmp_path, progress=False)
+    train(make_setup(config), tmp_path, RunHooks(progress=False))
     slot = swept / "ours@learning_rate=0.0003,epsilon_decay=0.001"
     assert (tmp_path / "metrics.csv").read_text() == (slot / "metrics.csv").read_text()
     assert (tmp_path / "config.json").read_text() == (slot / "config.json").read_text()

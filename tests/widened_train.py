@@ -10,6 +10,7 @@ import jax
 
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
+from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.runner import train_settings
 
 if __name__ == "__main__":
@@ -23,5 +24,5 @@ if __name__ == "__main__":
         return [second] if len(offered) == 1 else []
 
     (out / "ours").mkdir(parents=True)
-    train_settings(make_setup(config), [(config, out / "ours")], progress=False, devices=[first], widen=widen)
+    train_settings(make_setup(config), [(config, out / "ours")], RunHooks(progress=False, devices=[first], widen=widen))
     print(len(offered), isinstance(offered[0], bool))

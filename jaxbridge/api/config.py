@@ -7,8 +7,6 @@ from typing import Sequence
 from jaxbridge.api.envs import EnvLike, env_name, load_env, seed_list
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import preset_values
-from jaxbridge.learn.approaches import BridgeKind, get_approach
-from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.errors import InputError, refusing
 
 
@@ -18,7 +16,8 @@ def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = 
     env (`preset="authors"` for the authors', default jaxbridge's), then `seeds` (a count from 0, or
     consecutive seeds), `cycles` and any field as a keyword; None means "not given". Checked as train.py
     checks it (InputError in one line: an unknown env, field or learner, a value out of range, a quirk or
-    test protocol the env lacks, episodes that overflow the replay buffer, a seed block above the seeds)."""
+    test protocol the env lacks, episodes that overflow the replay buffer, a seed block above the seeds;
+    a learner of your own is checked against the learner contract when a training is prepared)."""
     given = {field: value for field, value in overrides.items() if value is not None}
     unknown = sorted(set(given) - {f.name for f in dataclasses.fields(TrainConfig)})
     if unknown:
@@ -54,13 +53,8 @@ def _check_fits_env(config: TrainConfig, env_cls) -> None:
 
 
 def _check_learner(config: TrainConfig, env_cls) -> None:
-    """Refuse a learner that does not load or make a learner, and one of your own that breaks the learner
-    contract (learn/learner.check_learner: shapes only, nothing is computed)."""
-    from jaxbridge.learn.learner import LearnerContractError, check_learner
-    from jaxbridge.learn.learners import registered
-    with refusing("learner", (ValueError, LearnerContractError)):  # the setup resolves the learner by name, makes it
-        learning = get_approach(config.approach).bridge is BridgeKind.Q  # else ours': what the learner would fit
-        learner = make_setup(dataclasses.replace(config, approach=config.approach if learning else "ours", num_seeds=1),
-                             env_cls).learner  # one seed's tasks
-        if config.learner not in registered():
-            check_learner(learner, config)
+    """Refuse a learner that does not load (an unknown name, a module or factory that is not there); its
+    contract is checked on the training's own setups (api/training.prepare)."""
+    from jaxbridge.learn.learners import learner_factory
+    with refusing("learner"):
+        learner_factory(config.learner)

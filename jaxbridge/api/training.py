@@ -20,6 +20,7 @@ from jaxbridge.learn.approaches import APPROACHES, get_approach
 from jaxbridge.learn.online import TrainOutput
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import rundir
+from jaxbridge.run.hooks import RunHooks
 from jaxbridge.utils.distributed import is_primary
 from jaxbridge.utils.errors import InputError, refusing
 from jaxbridge.utils.stats import cell_text, ci_text
@@ -83,10 +84,10 @@ class Training:
     `prepare_resume`). `run()` trains and returns the Experiment; `release()` gives the lock back where
     it will not run."""
 
-    def __init__(self, config: TrainConfig, approaches: list[str], run_dir: Path, work: Callable[..., dict],
-                 lock: rundir.RunLock | None, temporary: Path | None = None, start_line: str = ""):
+    def __init__(self, config: TrainConfig, approaches: list[str], run_dir: Path, work: Callable[[RunHooks], dict],
+                 hooks: RunHooks, lock: rundir.RunLock | None, temporary: Path | None = None, start_line: str = ""):
         self.config, self.approaches, self.run_dir = config, tuple(approaches), run_dir
-        self._work, self._lock, self._temporary, self._start_line = work, lock, temporary, start_line
+        self._work, self._hooks, self._lock, self._temporary, self._start_line = work, hooks, lock, temporary, start_line
 
     def describe(self) -> str:
         """What this training trains, and what the env's default leaves out (train.py's first line)."""
@@ -101,7 +102,7 @@ class Training:
 
         set_quiet(not debug)
         try:
-            summaries = self._work(**({} if stop is None else {"stop": stop, "trained": trained}))
+            summaries = self._work(dataclasses.replace(self._hooks, stop=stop, on_cycle=None if trained is None else trained.set))
             metrics = _read_metrics(self.run_dir, list(summaries)) if is_primary() else {}
             return Experiment(self.config, tuple(summaries), metrics, summaries,
                               None if self._temporary else self.run_dir)
@@ -154,15 +155,18 @@ def prepare(env: EnvLike | None = None, approaches: str | Sequence[str] | None =
             name: str | None = None, overwrite: bool = False, sweep: Mapping[str, Sequence] | Sequence[str] | None = None,
             workers: int | None = None, devices: list | None = None, max_memory: float | None = None,
             progress: bool = False, tensorboard: bool = False, **overrides) -> Training:
-    """`train`'s checks and directory, without training yet: the Training to `run()` (see `train`)."""
+    """`train`'s checks and directory, without training yet: the Training to `run()` (see `train`). Each
+    program's setup is built here once; the checks and the training read it."""
     if name is not None:
         rundir.check_name(name)
     config = make_config(env, seeds, cycles, **overrides)
     env_cls = load_env(config.env)
-    names = default_approaches(env_cls) if approaches is None else _approach_list(approaches, config, env_cls)
+    names = default_approaches(env_cls) if approaches is None else _approach_list(approaches)
     hyper_grid = _sweep_grid(sweep)
-    _check_memory(config, env_cls, names, len(grid.settings(hyper_grid)), workers, max_memory)
+    with _refusing_setups(config):
+        _check_memory(config, env_cls, names, hyper_grid, workers, max_memory)
     _check_reachable(config, env_cls)
+    experiment = _plan(config, names, hyper_grid, env_cls)
     temporary = None if out is not None else Path(tempfile.mkdtemp(prefix="jaxbridge-"))
     run_dir, replaced, lock = Path(out if out is not None else temporary) / (name or env_cls.name), None, None
     try:
@@ -173,16 +177,16 @@ def prepare(env: EnvLike | None = None, approaches: str | Sequence[str] | None =
         raise InputError(f"cannot write experiment directory {run_dir}: {err.strerror}") from None
     from jaxbridge.run.experiments import train_approaches  # after the refusals: it loads orbax (~0.2 s)
 
-    work = lambda **events: train_approaches(config, names, run_dir, progress, workers=workers, devices=devices,
-                                             replaced=replaced, grid=hyper_grid, tensorboard=tensorboard, **events)
-    return Training(dataclasses.replace(config, approach=names[0]), names, run_dir, work, lock, temporary,
+    work = lambda hooks: train_approaches(experiment, run_dir, hooks, workers=workers, replaced=replaced)
+    return Training(dataclasses.replace(config, approach=names[0]), names, run_dir, work,
+                    RunHooks(progress, tensorboard=tensorboard, devices=devices), lock, temporary,
                     _start_line(config, env_cls, names, workers))
 
 
 def prepare_resume(run_dir: str | Path, workers: int | None = None, devices: list | None = None,
                    progress: bool = False, tensorboard: bool = False) -> Training:
     """`resume`'s checks and lock, without training yet: the Training to `run()`."""
-    from jaxbridge.run.experiments import check_resumable, is_experiment_dir, load_experiment, runs, train_approaches
+    from jaxbridge.run.experiments import check_resumable, is_experiment_dir, load_experiment, train_approaches
     from jaxbridge.run.run_state import load_config
     from jaxbridge.run.runner import train as train_run
 
@@ -190,17 +194,16 @@ def prepare_resume(run_dir: str | Path, workers: int | None = None, devices: lis
     with refusing():
         if is_experiment_dir(run_dir):
             config, approaches, hyper_grid = load_experiment(run_dir)
-            load_env(config.env)
-            check_resumable(run_dir, list(runs(config, approaches, hyper_grid)))
-            work = lambda **events: train_approaches(config, approaches, run_dir, progress, resume=True, workers=workers,
-                                                     devices=devices, grid=hyper_grid, tensorboard=tensorboard, **events)
+            experiment = _plan(config, approaches, hyper_grid, load_env(config.env))
+            check_resumable(run_dir, list(experiment.named))
+            work = lambda hooks: train_approaches(experiment, run_dir, hooks, resume=True, workers=workers)
         else:
             config, approaches = load_config(run_dir), None
             setup = make_setup(config, load_env(config.env))
-            work = lambda **events: {config.approach: train_run(setup, run_dir, progress, resume=True, devices=devices,
-                                                                tensorboard=tensorboard, **events)}
+            work = lambda hooks: {config.approach: train_run(setup, run_dir, hooks, resume=True)}
     lock = rundir.RunLock(run_dir).acquire() if is_primary() else None
-    return Training(config, approaches or [config.approach], run_dir, work, lock)
+    return Training(config, approaches or [config.approach], run_dir, work,
+                    RunHooks(progress, tensorboard=tensorboard, devices=devices), lock)
 
 
 def train(env: EnvLike | None = None, approaches: str | Sequence[str] | None = "ours",
@@ -239,19 +242,40 @@ def default_approaches(env_cls) -> list[str]:
     return list(env_cls.default_approaches or APPROACHES)
 
 
-def _approach_list(approaches: str | Sequence[str], config: TrainConfig, env_cls) -> list[str]:
-    """The approaches by name, each known and its Q-network buildable with the config (e.g. the learned
-    selector refuses the authors' input scaling)."""
-    from jaxbridge.learn.dqn import q_network
-
+def _approach_list(approaches: str | Sequence[str]) -> list[str]:
+    """The approaches by name, each known, none twice."""
     names = [approaches] if isinstance(approaches, str) else list(approaches)
     for approach in names:
         with refusing("approaches"):
             get_approach(approach)
-            q_network(dataclasses.replace(config, approach=approach), env_cls())
     if not names or len(set(names)) != len(names):
         raise InputError(f"approaches: one or more names, none twice; got {names}")
     return names
+
+
+def _refusing_setups(config: TrainConfig):
+    """Where setups are built: a network the config cannot build (e.g. the learned selector with the
+    authors' input scaling) is refused naming the approaches; with a learner of your own, naming it."""
+    from jaxbridge.learn.learner import LearnerContractError
+    from jaxbridge.learn.learners import registered
+
+    return refusing("approaches" if config.learner in registered() else "learner", (ValueError, LearnerContractError))
+
+
+def _plan(config: TrainConfig, names: list[str], hyper_grid: dict[str, tuple], env_cls):
+    """The experiment's programs with their setups (run/experiments.plan), built once; a learner of your own
+    checked against the learner contract on them (learn/learner.check_learner: shapes only)."""
+    from jaxbridge.learn.approaches import BridgeKind
+    from jaxbridge.learn.learner import check_learner
+    from jaxbridge.learn.learners import registered
+    from jaxbridge.run.experiments import plan
+
+    with _refusing_setups(config):
+        experiment = plan(config, names, hyper_grid, env_cls)
+        for program in experiment.programs if config.learner not in registered() else []:
+            if program.setup.approach.bridge is BridgeKind.Q:
+                check_learner(program.setup.learner, program.setup.config)
+    return experiment
 
 
 def _sweep_grid(sweep: Mapping[str, Sequence] | Sequence[str] | None) -> dict[str, tuple]:
@@ -270,15 +294,18 @@ def _sweep_text(value) -> str:
     return grid.value_text(value)
 
 
-def _check_memory(config: TrainConfig, env_cls, approaches: list[str], settings: int, workers: int | None,
+def _check_memory(config: TrainConfig, env_cls, names: list[str], hyper_grid: dict[str, tuple], workers: int | None,
                   max_memory: float | None) -> None:
-    """Refuse a run whose memory estimate exceeds `max_memory` GiB (default: what is available); the
-    settings of a sweep train side by side, as more seeds (the worst case)."""
+    """Refuse a run whose memory estimate exceeds `max_memory` GiB (default: what is available), before
+    anything of its size is built (run/memory.py)."""
     from jaxbridge.learn.devices import default_workers
     from jaxbridge.run import memory
+    from jaxbridge.run.experiments import program_names, runs
 
-    memory.check_training(dataclasses.replace(config, num_seeds=config.num_seeds * settings), env_cls, approaches,
-                          workers or default_workers(approaches), None if max_memory is None else int(max_memory * 2**30))
+    named = runs(config, names, hyper_grid)
+    programs = [(named[group[0]], len(group)) for group in program_names(named)]
+    memory.check_training(config, env_cls, programs, workers or default_workers(programs),
+                          None if max_memory is None else int(max_memory * 2**30))
 
 
 def _check_reachable(config: TrainConfig, env_cls) -> None:

@@ -11,15 +11,16 @@ import dataclasses
 import json
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+from dataclasses import dataclass
 from pathlib import Path
-
 
 from envs_jax import env_class
 from jaxbridge.core import grid as hyper_grid
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import default_workers, split_devices
-from jaxbridge.learn.setup import make_setup
+from jaxbridge.learn.setup import Setup, make_setup
 from jaxbridge.run import checkpoint, comparison, rundir
+from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.runner import Interrupted, train_settings
 from jaxbridge.run.scheduling import DevicePool
 from jaxbridge.utils import pace
@@ -72,54 +73,85 @@ def check_resumable(experiment_dir: Path, names: list[str]) -> None:
                                              f"start the experiment over with --overwrite")
 
 
-def train_approaches(config: TrainConfig, approaches: list[str], experiment_dir: Path, progress: bool = True,
-                     resume: bool = False, workers: int | None = None, devices: list | None = None,
-                     replaced: Path | None = None, stop: threading.Event | None = None,
-                     trained: threading.Event | None = None, tensorboard: bool = False,
-                     grid: dict[str, tuple] | None = None) -> dict[str, dict]:
-    """Train every approach (run directory `experiment_dir/<approach>`), or with a hyperparameter `grid`
-    every approach and setting (`experiment_dir/<approach>@<setting>`), then write the comparison files
-    (figure, results.md, results.csv), also after a fault or Ctrl-C for the runs that have files. Runs
-    that differ only in leaf hyperparameters train as one program (runner.train_settings); the programs
-    train `workers` at a time. With `resume`, finished runs are kept, started ones continue from their
-    checkpoint and the others start. `replaced`: the run this one replaces, moved aside, deleted once
-    this one's experiment file is written. `stop` (set by another thread) stops every program after its
-    current cycle, checkpointed; `trained` is set after any cycle completes; `tensorboard`: event files
-    per run (run/tensorboard.py). Returns each run's summary, in order."""
-    named, primary = runs(config, approaches, grid), is_primary()  # only process 0 writes files
-    if resume:
-        check_resumable(experiment_dir, list(named))
-    elif primary:
-        write_experiment_file(experiment_dir, config, approaches, grid)
-        rundir.discard(replaced)
+@dataclass(frozen=True)
+class Program:
+    """Runs that train as one program (they differ only in leaf hyperparameters), with the setup of the
+    first, built once: the others' setups differ from it only in their config."""
+
+    names: list[str]
+    setup: Setup
+
+
+@dataclass(frozen=True)
+class Plan:
+    """An experiment before it trains: its base config, approaches and grid, each run's config by name,
+    and the programs they form, each with its setup (what the memory estimate reads too)."""
+
+    config: TrainConfig
+    approaches: list[str]
+    grid: dict[str, tuple]
+    named: dict[str, TrainConfig]
+    programs: list[Program]
+
+
+def program_names(named: dict[str, TrainConfig]) -> list[list[str]]:
+    """The runs that train as one program (equal but for leaf hyperparameters), by name, in order."""
     names = list(named)
-    programs = [[names[i] for i in group] for group in hyper_grid.program_groups(list(named.values()))]
+    return [[names[i] for i in group] for group in hyper_grid.program_groups(list(named.values()))]
+
+
+def plan(config: TrainConfig, approaches: list[str], grid: dict[str, tuple] | None = None, env_cls=None) -> Plan:
+    """The experiment's runs and programs, each program's setup built here, once."""
+    named, env_cls = runs(config, approaches, grid), env_cls or env_class(config.env)
+    return Plan(config, approaches, grid or {}, named,
+                [Program(names, make_setup(named[names[0]], env_cls)) for names in program_names(named)])
+
+
+def train_approaches(experiment: Plan, experiment_dir: Path, hooks: RunHooks, resume: bool = False,
+                     workers: int | None = None, replaced: Path | None = None) -> dict[str, dict]:
+    """Train every run of the experiment (run directory `experiment_dir/<approach>`, or with a grid
+    `experiment_dir/<approach>@<setting>`), then write the comparison files (figure, results.md,
+    results.csv), also after a fault or Ctrl-C for the runs that have files. The programs train
+    `workers` at a time. With `resume`, finished runs are kept, started ones continue from their
+    checkpoint and the others start. `replaced`: the run this one replaces, moved aside, deleted once
+    this one's experiment file is written. Returns each run's summary, in order."""
+    config, primary, names = experiment.config, is_primary(), list(experiment.named)  # only process 0 writes files
+    if resume:
+        check_resumable(experiment_dir, names)
+    elif primary:
+        write_experiment_file(experiment_dir, config, experiment.approaches, experiment.grid)
+        rundir.discard(replaced)
+    programs = experiment.programs
     # Across processes the programs take turns, in the same order everywhere: the gathers after each
     # cycle are collective, and two programs' gathers must not cross.
-    workers = 1 if multi_process() else workers or default_workers(programs)
-    what = f"{len(approaches)} approaches" + (f" x {len(names) // len(approaches)} settings" if grid else "")
-    bar = ExperimentProgress({p[0]: config.cycles for p in programs}, f"{config.env} x{config.num_seeds} seeds, {what}",
-                             min(workers, len(programs)), progress and primary)
-    stop = stop or threading.Event()
-    pool = DevicePool(split_devices(devices, min(workers, len(programs))), len(programs))
-    program = ProgramRun(named, experiment_dir, env_class(config.env), bar, stop, trained, tensorboard, pool)
-    order, unwritable = sorted(programs, key=lambda p: -COST.get(named[p[0]].approach, 0) * len(p)), False
+    workers = min(1 if multi_process() else workers or default_workers(programs), len(programs))
+    pool = DevicePool(split_devices(hooks.devices, workers), len(programs))
+    hooks = dataclasses.replace(hooks, stop=hooks.stop or threading.Event(), display=experiment_display(experiment, hooks, workers))
+    order, unwritable = sorted(programs, key=lambda p: -COST.get(p.setup.approach.name, 0) * len(p.names)), False
     try:
-        results = run_side_by_side(program, order, workers, stop)
-        infos = {name: info for p in programs for name, info in zip(p, results[p[0]])}
+        results = run_side_by_side(ProgramRun(experiment.named, experiment_dir, hooks, pool), order, workers, hooks.stop)
+        infos = {name: info for p in programs for name, info in zip(p.names, results[p.names[0]])}
         if primary:
             write_atomic(experiment_dir / SCHEDULE_FILE, json.dumps(pool.record(), indent=2) + "\n")
-            pace.record(config.env, {named[n].approach: info["elapsed_s"] / (config.num_seeds * info["cycles"])
-                                     for n, info in infos.items() if info and not grid})
+            pace.record(config.env, {experiment.named[n].approach: info["elapsed_s"] / (config.num_seeds * info["cycles"])
+                                     for n, info in infos.items() if info and not experiment.grid})
         return {name: infos[name] for name in names}
     except WriteError:
         unwritable = True
         raise
     finally:
-        bar.close()
+        hooks.display.close()
         done = [n for n in names if (experiment_dir / n / "metrics.csv").is_file()]
         if done and primary and not unwritable:
             comparison.write_comparison(experiment_dir, config.env, comparison.run_labels(done))
+
+
+def experiment_display(experiment: Plan, hooks: RunHooks, workers: int) -> ExperimentProgress:
+    """One progress display for every program's cycles (on process 0)."""
+    config, approaches = experiment.config, experiment.approaches
+    what = f"{len(approaches)} approaches" + (f" x {len(experiment.named) // len(approaches)} settings" if experiment.grid else "")
+    return ExperimentProgress({p.names[0]: config.cycles for p in experiment.programs},
+                              f"{config.env} x{config.num_seeds} seeds, {what}", workers, hooks.progress and is_primary())
 
 
 def write_experiment_file(experiment_dir: Path, config: TrainConfig, approaches: list[str],
@@ -131,32 +163,29 @@ def write_experiment_file(experiment_dir: Path, config: TrainConfig, approaches:
 
 
 class ProgramRun:
-    """Runs one program of an experiment (its runs that train as one, `program` their names): brax's
-    low-level runs seed after seed, the others by train_settings on a share of the devices, which a
-    worker takes from the pool for the program (with any spare shares it takes on the way) and gives
-    back after it."""
+    """Runs one program of an experiment: brax's low-level runs seed after seed, the others by
+    train_settings on a share of the devices, which a worker takes from the pool for the program (with
+    any spare shares it takes on the way) and gives back after it."""
 
-    def __init__(self, named: dict[str, TrainConfig], experiment_dir: Path, env_cls, bar, stop: threading.Event,
-                 trained: threading.Event | None, tensorboard: bool, pool: DevicePool):
-        self.named, self.experiment_dir, self.env_cls, self.bar = named, experiment_dir, env_cls, bar
-        self.stop, self.trained, self.tensorboard, self.pool = stop, trained, tensorboard, pool
+    def __init__(self, named: dict[str, TrainConfig], experiment_dir: Path, hooks: RunHooks, pool: DevicePool):
+        self.named, self.experiment_dir, self.hooks, self.pool = named, experiment_dir, hooks, pool
 
-    def __call__(self, program: list[str]) -> list[dict]:
-        if self.stop.is_set():  # interrupted before this program's turn
+    def __call__(self, program: Program) -> list[dict]:
+        if self.hooks.stop.is_set():  # interrupted before this program's turn
             raise Interrupted(0)
-        setup, held = make_setup(self.named[program[0]], self.env_cls), self.pool.take()
+        held = self.pool.take()
         try:
-            bar = self.bar.for_program(program[0])
-            if setup.approach.low_level:  # brax: seed after seed, one checkpoint, on the default device
-                return [self.low_level(make_setup(self.named[n], self.env_cls), self.experiment_dir / n, bar)
-                        for n in program]
-            return self.train(setup, program, held, bar)
+            hooks = dataclasses.replace(self.hooks, display=self.hooks.display.for_program(program.names[0]))
+            if program.setup.approach.low_level:  # brax: seed after seed, one checkpoint, on the default device
+                return [self.low_level(dataclasses.replace(program.setup, config=self.named[n]), self.experiment_dir / n,
+                                       hooks) for n in program.names]
+            return self.train(program, held, hooks)
         finally:
             self.pool.give_back(held)
 
-    def train(self, setup, program: list[str], held: list, bar) -> list[dict]:
+    def train(self, program: Program, held: list, hooks: RunHooks) -> list[dict]:
         """The program's runs by train_settings on the first share `held`, widened onto spare ones."""
-        run_dirs = [self.experiment_dir / name for name in program]
+        run_dirs = [self.experiment_dir / name for name in program.names]
         started = all(checkpoint.sealed_steps(d / "checkpoints") for d in run_dirs)
         if not started and is_primary():
             for run_dir in run_dirs:
@@ -166,27 +195,26 @@ class ProgramRun:
             more = self.pool.spare(wanted)
             held.extend(more)
             return [d for share in more for d in share]
-        return train_settings(setup, [(self.named[n], d) for n, d in zip(program, run_dirs)], resume=started,
-                              bar=bar, stop=self.stop, devices=held[0], trained=self.trained,
-                              tensorboard=self.tensorboard, widen=widen)
+        return train_settings(program.setup, [(self.named[n], d) for n, d in zip(program.names, run_dirs)],
+                              dataclasses.replace(hooks, devices=held[0], widen=widen), resume=started)
 
-    def low_level(self, setup, run_dir: Path, bar) -> dict:
+    def low_level(self, setup: Setup, run_dir: Path, hooks: RunHooks) -> dict:
         from jaxbridge.run import low_level_runs  # brax: imported only when used
         done = low_level_runs.finished(run_dir, setup.config)
         if done is not None:
-            bar.update(setup.config.cycles)
+            hooks.display.update(setup.config.cycles)
             return done
         if is_primary():
             rundir.fresh(run_dir)
-        return low_level_runs.train_low_level(setup, run_dir, bar=bar, stop=self.stop)
+        return low_level_runs.train_low_level(setup, run_dir, hooks)
 
 
-def run_side_by_side(run, programs: list[list[str]], workers: int, stop: threading.Event) -> dict[str, list[dict]]:
+def run_side_by_side(run, programs: list[Program], workers: int, stop: threading.Event) -> dict[str, list[dict]]:
     """`run(program)` for every program, `workers` at a time, in that order; {first name: its result}.
     After Ctrl-C or an error every running program checkpoints and stops; then the first error other
     than an interruption is raised, or one Interrupted naming each interrupted program's cycles."""
     with ThreadPoolExecutor(workers, thread_name_prefix="approach") as pool:
-        futures = {program[0]: pool.submit(run, program) for program in programs}
+        futures = {program.names[0]: pool.submit(run, program) for program in programs}
         try:
             # Wake up now and then: the OS may deliver Ctrl-C's SIGINT to a worker thread, and Python
             # only runs the handler (raising KeyboardInterrupt here) when the main thread runs.

@@ -5,7 +5,6 @@ loads as it loads any run's. Nothing is saved mid-run: an interrupted run trains
 from __future__ import annotations
 
 import json
-import threading
 import time
 from pathlib import Path
 
@@ -19,6 +18,7 @@ from jaxbridge.learn.online import CycleMetrics
 from jaxbridge.learn.setup import Setup
 from jaxbridge.run import artifacts, checkpoint
 from jaxbridge.run.run_state import checkpoint_record
+from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.runner import Interrupted
 from jaxbridge.utils import compile_cache
 from jaxbridge.utils.distributed import is_primary
@@ -40,7 +40,7 @@ def train_seed(setup: Setup, seed: int, on_cycle=None) -> tuple[list[dict], tupl
     controls = approach.controls  # a low-level approach's controls are the brax view's
     train_arrays, test_arrays = _of_seed(setup.train, seed), _of_seed(setup.test, seed)
     adapter = BridgeEnv(setup.train_env, jax.tree.map(lambda x: x[:1], train_arrays), controls.call_planner,
-                        controls.full_state, key=jax.random.key(seed))
+                        controls.observation.whole_state, key=jax.random.key(seed))
     budget = Budget(config.cycles, config.episodes_per_cycle * config.train_steps * config.low_level_budget,
                     config.train_steps)
     test_keys = jax.random.split(jax.random.key(seed), test_arrays.horizons.shape[0] + 1)
@@ -77,17 +77,17 @@ def _history(per_seed: list[list[dict]]) -> list[CycleMetrics]:
             for c in range(len(per_seed[0]))]
 
 
-def train_low_level(setup: Setup, run_dir: Path, progress: bool = True, bar=None,
-                    stop: threading.Event | None = None) -> dict:
-    """Every seed of the run, then its files; Interrupted (nothing saved) when `stop` is set between seeds.
-    `bar`: a progress display shared with other runs (else its own). Returns the run's summary."""
-    config, start, primary = setup.config, time.perf_counter(), is_primary()
+def train_low_level(setup: Setup, run_dir: Path, hooks: RunHooks = RunHooks()) -> dict:
+    """Every seed of the run, then its files; Interrupted (nothing saved) when `hooks.stop` is set between
+    seeds. `hooks.display`: a progress display shared with other runs (else its own). Returns the run's
+    summary."""
+    config, start, primary, bar, stop = setup.config, time.perf_counter(), is_primary(), hooks.display, hooks.stop
     if primary:
         write_atomic(run_dir / "config.json", json.dumps(config.to_dict(), indent=2) + "\n")
     own_bar = bar is None
     if own_bar:
         bar = cycle_progress(config.cycles, f"{config.env} {config.approach} x{config.num_seeds} seeds",
-                             progress and primary)
+                             hooks.progress and primary)
     per_seed, policies, evaluations = [], [], 0
     janitor = compile_cache.CacheJanitor()
 

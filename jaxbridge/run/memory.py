@@ -50,7 +50,8 @@ def tree_bytes(tree) -> int:
 
 
 def state_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
-    """One seed's learner state for `config.approach`, from abstract shapes (nothing is allocated)."""
+    """One seed's learner state for `config.approach`, from abstract shapes (nothing is allocated), on a
+    one-seed setup: a run too big to fit is refused before its seeds' tasks are built."""
     return tree_bytes(jax.eval_shape(make_setup(dataclasses.replace(config, num_seeds=1), env_cls).init_learners))
 
 
@@ -72,12 +73,14 @@ def totals(count: int, each: int, limit: int) -> tuple[int, int]:
     return RUNTIME_BYTES + count * each, max(0, (limit - RUNTIME_BYTES) // each)
 
 
-def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], approaches: list[str], workers: int,
-                   limit: int | None = None) -> int:
-    """The estimate for `approaches` trained `workers` at a time (the largest together); TooBig if it
-    exceeds `limit` bytes (default: the memory available now)."""
+def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], programs: list[tuple[TrainConfig, int]],
+                   workers: int, limit: int | None = None) -> int:
+    """The estimate for an experiment's programs (each its first run's config and its number of runs,
+    trained side by side) trained `workers` at a time (the largest together); TooBig if it exceeds
+    `limit` bytes (default: the memory available now)."""
     limit, what = limit_bytes(limit)
-    states = sorted((state_bytes(dataclasses.replace(config, approach=a), env_cls) for a in approaches), reverse=True)
+    approaches = list(dict.fromkeys(c.approach for c, _ in programs))
+    states = sorted((state_bytes(c, env_cls) * runs for c, runs in programs), reverse=True)
     per_seed = STATE_COPIES * sum(states[:max(1, workers)]) + task_bytes(config, env_cls)
     need, fit = totals(config.num_seeds, per_seed, limit)
     if need > limit:

@@ -4,7 +4,6 @@ exact resume, clean Ctrl-C and the numerical-fault guard."""
 from __future__ import annotations
 
 import dataclasses
-import threading
 import time
 from pathlib import Path
 from typing import Callable
@@ -19,6 +18,7 @@ from jaxbridge.learn.setup import Setup, make_setup
 from jaxbridge.run import checkpoint
 from jaxbridge.run.run_state import (Checkpointer, Done, RunGroup, check_checkpoint_belongs, fresh_start, load_config,
                                      restored, write_run_files)
+from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.scheduling import worth_widening
 from jaxbridge.run.tensorboard import CycleEvents
 from jaxbridge.utils.files import WriteError
@@ -37,52 +37,44 @@ class NumericalFault(Exception):
     """A non-finite loss or Q-value: the run stops, keeping the last good checkpoint."""
 
 
-def train(setup: Setup, run_dir: Path, progress: bool = True, resume: bool = False, **options) -> dict:
+def train(setup: Setup, run_dir: Path, hooks: RunHooks = RunHooks(), resume: bool = False,
+          fault_injection: Callable | None = None) -> dict:
     """One run: `train_settings` with the setup's own config alone. Returns its summary."""
-    return train_settings(setup, [(setup.config, run_dir)], progress, resume, **options)[0]
+    return train_settings(setup, [(setup.config, run_dir)], hooks, resume, fault_injection)[0]
 
 
-def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], progress: bool = True,
-                   resume: bool = False, fault_injection: Callable | None = None, bar=None,
-                   stop: threading.Event | None = None, devices: list | None = None,
-                   trained: threading.Event | None = None, tensorboard: bool = False,
-                   widen: Callable[[Callable[[int], bool]], list] | None = None) -> list[dict]:
+def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], hooks: RunHooks = RunHooks(),
+                   resume: bool = False, fault_injection: Callable | None = None) -> list[dict]:
     """Run the cycles of every (config, run directory) in `settings` as one program (continuing each
     run's latest checkpoint with `resume`), writing each run's files and checkpoints into its directory.
     The configs differ from `setup.config` only in their numeric hyperparameters (config.LEAF_FIELDS),
     which the cycle takes as leaves (learn/online.Cycle): each run's numbers are those it gets alone.
+    `hooks` (run/hooks.py): progress, stop, per-cycle callback, TensorBoard, the devices the slot axis
+    is sharded over (the numbers do not depend on them; a run may resume, or widen, onto others).
 
     `fault_injection(cycle, learners) -> learners` lets tests corrupt the state before a cycle (slot
-    i of the leading axis: setting i // num_seeds, seed i % num_seeds). `bar`: a progress bar shared
-    with other runs (else its own). `stop`: when set (by another thread), checkpoint the last completed
-    cycle and raise Interrupted; `trained` is set after each completed cycle. `devices`: the slot axis
-    is sharded over them (default: the first local device); the numbers do not depend on them, and a
-    run may resume on others. `tensorboard`: also log each cycle to event files (run/tensorboard.py).
-    `widen(wanted)`: after a cycle, more devices to shard the slots over (run/scheduling.py), where
-    `wanted(count)` says they are worth their recompile. Returns each run's summary, in order."""
+    i of the leading axis: setting i // num_seeds, seed i % num_seeds). Returns each run's summary."""
     start, config = time.perf_counter(), setup.config
-    slots = SeedMesh(len(settings) * config.num_seeds, tuple(devices or jax.local_devices()[:1]), config.seed_block)
+    slots = SeedMesh(len(settings) * config.num_seeds, tuple(hooks.devices or jax.local_devices()[:1]), config.seed_block)
     group = RunGroup(setup, settings, slots)
     done, elapsed_before = restored(group) if resume else fresh_start(group)
     elapsed = lambda: elapsed_before + time.perf_counter() - start
     done = Done(slots.place(done.learners), done.histories)  # checkpoints hold each run's state on one device
-    cycle, saver = Cycle(setup, slots, group.configs), Checkpointer(group, elapsed, saved=done.cycles)
-    display, writable, timer = CycleDisplay(group, bar, progress, tensorboard, saved=done.cycles), True, CycleTimer()
+    program, saver = SlotProgram(group), Checkpointer(group, elapsed, saved=done.cycles)
+    display, writable = CycleDisplay(group, hooks, saved=done.cycles), True
     try:
         for c in range(done.cycles + 1, config.cycles + 1):
-            if stop is not None and stop.is_set():
+            if hooks.stop is not None and hooks.stop.is_set():
                 raise KeyboardInterrupt
-            with timer:
-                done = next_cycle(cycle, group, done, c, fault_injection, saver.saved)
-            if trained is not None:
-                trained.set()
+            done = program.next_cycle(done, c, fault_injection, saver.saved)
+            if hooks.on_cycle is not None:
+                hooks.on_cycle()
             display.cycle(c, [history[-1] for history in done.histories])
             if c % config.checkpoint_every == 0 or c == config.cycles:
                 saver.save(done)
-            more = widen(timer.worth(group.slots, config.cycles - c)) if widen and c < config.cycles else []
-            if more:  # the same per-seed program on more devices: the numbers stay the same
-                group, done = widened(group, done, more)
-                cycle, saver.group, timer = Cycle(setup, group.slots, group.configs), group, CycleTimer()
+            if hooks.widen is not None and c < config.cycles:
+                done = program.widen(done, hooks.widen, config.cycles - c)
+                saver.group = program.group
     except KeyboardInterrupt:
         saver.save_if_behind(done)
         raise Interrupted(done.cycles) from None
@@ -91,38 +83,43 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], progr
         raise
     finally:
         display.close()
-        infos = write_run_files(group, done, elapsed(), writable)
+        infos = write_run_files(program.group, done, elapsed(), writable)
     return infos
 
 
-def widened(group: RunGroup, done: Done, devices: list) -> tuple[RunGroup, Done]:
-    """The group's slots sharded over their devices and `devices` too, and the state moved onto them."""
-    old = group.slots
-    group = dataclasses.replace(group, slots=SeedMesh(old.num_seeds, old.devices + tuple(devices), old.block))
-    return group, Done(group.slots.place(old.unpad(done.learners)), done.histories)
+class SlotProgram:
+    """The group's cycle compiled for its devices, each cycle timed: its first (which compiles) apart,
+    so that `widen` can tell whether more devices pay for compiling it again."""
 
-
-class CycleTimer:
-    """Each cycle's seconds, the first's (which compiles) apart: whether more devices are worth it."""
-
-    def __init__(self):
+    def __init__(self, group: RunGroup):
+        self.group, self.cycle = group, Cycle(group.setup, group.slots, group.configs)
         self.first_s = self.last_s = None
 
-    def __enter__(self):
-        self.start = time.perf_counter()
-
-    def __exit__(self, *exc):
-        self.last_s = time.perf_counter() - self.start
+    def next_cycle(self, done: Done, c: int, fault_injection: Callable | None, last_saved: int) -> Done:
+        start = time.perf_counter()
+        done = next_cycle(self.cycle, self.group, done, c, fault_injection, last_saved)
+        self.last_s = time.perf_counter() - start
         self.first_s = self.last_s if self.first_s is None else self.first_s
+        return done
 
-    def worth(self, slots: SeedMesh, cycles_left: int) -> Callable[[int], bool]:
-        """`wanted(count)`: whether `count` more devices save more than they cost (run/scheduling.py)."""
+    def widen(self, done: Done, widen: Callable, cycles_left: int) -> Done:
+        """`done` moved onto more devices, where `widen` offers some worth it (run/scheduling.py); the same
+        per-seed program on more devices: the numbers stay the same."""
+        old = self.group.slots
+
+        def per_device(more: int) -> int:  # seeds one after another on each device, with `more` devices
+            return SeedMesh(old.num_seeds, old.devices + (None,) * more, old.block).padded // (old.num_devices + more)
+
         def wanted(count: int) -> bool:
-            wider = SeedMesh(slots.num_seeds, slots.devices + (None,) * count, slots.block)
             compile_s = max(self.first_s - self.last_s, 0.0)
-            return worth_widening(slots.padded // slots.num_devices, wider.padded // wider.num_devices, cycles_left,
-                                  self.last_s, compile_s)
-        return wanted
+            return worth_widening(per_device(0), per_device(count), cycles_left, self.last_s, compile_s)
+
+        more = widen(wanted)
+        if not more:
+            return done
+        self.group = dataclasses.replace(self.group, slots=SeedMesh(old.num_seeds, old.devices + tuple(more), old.block))
+        self.cycle, self.first_s = Cycle(self.group.setup, self.group.slots, self.group.configs), None
+        return Done(self.group.slots.place(old.unpad(done.learners)), done.histories)
 
 
 def next_cycle(cycle: Cycle, group: RunGroup, done: Done, c: int, fault_injection: Callable | None,
@@ -153,14 +150,14 @@ class CycleDisplay:
     """What shows each completed cycle: the progress bar (its own, or one shared with other runs) and
     TensorBoard's event files (`tensorboard`, on process 0)."""
 
-    def __init__(self, group: RunGroup, bar, progress: bool, tensorboard: bool, saved: int):
-        config = group.setup.config
-        self.events = [CycleEvents(d, c.to_dict()) for c, d in group.written] if tensorboard else []
+    def __init__(self, group: RunGroup, hooks: RunHooks, saved: int):
+        config, bar = group.setup.config, hooks.display
+        self.events = [CycleEvents(d, c.to_dict()) for c, d in group.written] if hooks.tensorboard else []
         self.own_bar, self.approach = bar is None, config.approach
         if self.own_bar:
             what = f"{len(group.settings)} settings x " if len(group.settings) > 1 else ""
-            bar = cycle_progress(config.cycles, f"{config.env} {what}x{config.num_seeds} seeds", progress and group.primary,
-                                 saved)
+            bar = cycle_progress(config.cycles, f"{config.env} {what}x{config.num_seeds} seeds",
+                                 hooks.progress and group.primary, saved)
         else:
             bar.update(saved)
         self.bar = bar
