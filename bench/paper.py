@@ -34,7 +34,7 @@ from bench.ledger import add_reason_flags, append, seed_set
 from bench.records import (ENVS, RECORDS, ROOT, TEST_SEEDS, TEST_SETS, check_clean, git_commit, machine, refuse, run_child,
                            shown)
 from bench.results_blocks import PRESET_RUN
-from jaxbridge.run.comparison import run_labels, write_comparison
+from jaxbridge.run.comparison import read_metrics, run_labels, write_comparison
 from jaxbridge.run.experiments import load_experiment
 from jaxbridge.utils.files import write_atomic
 
@@ -71,13 +71,28 @@ def results_rows(experiment: Path, renamed: dict[str, str] | None = None) -> lis
 
 
 def write_run_records(run: Path, records: Path, name: str) -> None:
-    """An experiment's table (results.csv's rows), figure and generalisation sweep (eval.py --sweep
-    novelties) as `name`.csv, `name`.png, `name`_sweep.csv and `name`_sweep.png in `records`."""
+    """An experiment's table (results.csv's rows), each seed's last cycle, figure and generalisation sweep
+    (eval.py --sweep novelties) as `name`.csv, `name`_seeds.csv, `name`.png, `name`_sweep.csv and
+    `name`_sweep.png in `records`."""
     records.mkdir(parents=True, exist_ok=True)
     (records / f"{name}.csv").write_text(csv_text(results_rows(run)))
+    (records / f"{name}_seeds.csv").write_text(csv_text(seed_rows(run)))
     shutil.copy(run / "curves.png", records / f"{name}.png")
     for suffix in ("csv", "png"):
         shutil.copy(run / f"sweep_novelties.{suffix}", records / f"{name}_sweep.{suffix}")
+
+
+def seed_rows(experiment: Path) -> list[dict]:
+    """Each run's seeds at its last cycle (test solve rate, smooth test reward): what a ratio between two
+    approaches needs for its paired interval."""
+    rows = []
+    for run in sorted(p.parent for p in experiment.glob("*/metrics.csv")):
+        metrics = read_metrics(run, ("test_solve_rate", "test_smooth_reward"))
+        rows += [{"approach": run.name, "seed": seed, "cycle": metrics["test_solve_rate"].shape[1],
+                  "test_solve_rate": f"{metrics['test_solve_rate'][i, -1]:.4f}",
+                  "test_smooth_reward": f"{metrics['test_smooth_reward'][i, -1]:.4f}"}
+                 for i, seed in enumerate(metrics["seeds"])]
+    return rows
 
 
 def csv_text(rows: list[dict]) -> str:

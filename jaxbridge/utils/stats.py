@@ -46,6 +46,28 @@ def bootstrap_ci(scores: np.ndarray, statistic: Callable[[np.ndarray, int], np.n
     return low, high
 
 
+def ratio_ci(numerator: np.ndarray, denominator: np.ndarray, reps: int = REPS, confidence: float = CONFIDENCE,
+             seed: int = 0) -> tuple[float, float, float]:
+    """The ratio of two means over the same seeds, (ratio, low, high): its percentile bootstrap interval
+    resamples the seeds once for both (paired), so what the seeds share cancels."""
+    a, b = np.asarray(numerator, np.float64), np.asarray(denominator, np.float64)
+    draws = np.random.default_rng(seed).integers(0, len(a), size=(reps, len(a)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        replicates = a[draws].mean(1) / b[draws].mean(1)
+    tail = 100 * (1 - confidence) / 2
+    low, high = np.nanpercentile(replicates, [tail, 100 - tail])
+    return float(a.mean() / b.mean()), float(low), float(high)
+
+
+def verdict(value: float, interval: tuple[float, float] | None, bar: float, at_least: bool = True) -> str:
+    """A bar judged by one rule: "clearly met" when the whole 95% interval clears it, "met" when the
+    point estimate does, else "missed" (`at_least`: the bar is a floor; else a ceiling)."""
+    clears = (lambda x: x >= bar) if at_least else (lambda x: x <= bar)
+    if interval is not None and clears(interval[0] if at_least else interval[1]):
+        return "clearly met"
+    return "met" if clears(value) else "missed"
+
+
 def describe(scores: np.ndarray, reps: int = REPS) -> dict[str, np.ndarray]:
     """Every statistic of the tables for `scores` [runs, ...]: mean and IQM, each with its 95% interval
     (`mean_low`, `mean_high`, ...), and the lowest and highest run."""
