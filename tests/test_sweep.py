@@ -12,7 +12,8 @@ from oracle_vs_planning import oracle_and_pure_planning
 from envs_jax import BUILTIN, LightSwitchDoor, env_class
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import EpisodeResult
-from jaxbridge.run.sweep import SweepResult, evaluate_sweep, plot_sweep, sweep_batch, sweep_csv, sweep_markdown, sweep_tasks
+from jaxbridge.run.sweep import SweepResult, evaluate_sweep, sweep_batch, sweep_csv, sweep_markdown, sweep_tasks
+from jaxbridge.viz.figures import plot_sweep
 
 NOVELTIES = {  # how each env's task shows its number of novelty instances
     "light_switch_door": lambda spec: len(spec.door_cells),
@@ -94,3 +95,12 @@ def test_sweep_plot_is_a_png():
                          {"ours": [0, 1], "full": [0, 1]})
     png = plot_sweep(result, "title")
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
+
+
+def test_each_approach_keeps_one_colour_in_every_figure():
+    from jaxbridge.learn.approaches import APPROACHES, KNOWN
+    from jaxbridge.viz.figures import colour
+
+    assert all(colour(name) == colour(approach.label) for name, approach in KNOWN.items())
+    assert len({colour(name) for name in APPROACHES}) == len(APPROACHES)  # the paper's figure: all apart
+    assert colour("ours, PQN") == colour("ours, PQN")  # a label of no approach: stable, not random

@@ -10,7 +10,8 @@ import numpy as np
 from jaxbridge.api.policies import Policy, run_directory, runs_in
 from jaxbridge.learn.approaches import KNOWN
 from jaxbridge.run.comparison import run_labels
-from jaxbridge.run.sweep import SweepResult, evaluate_sweep, plot_sweep, sweep_csv, sweep_markdown
+from jaxbridge.run.sweep import SweepResult, evaluate_sweep, sweep_csv, sweep_markdown
+from jaxbridge.viz.figures import plot_sweep
 from jaxbridge.utils.errors import InputError, refusing
 from jaxbridge.utils.files import write_atomic
 

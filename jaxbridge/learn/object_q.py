@@ -14,7 +14,9 @@ from typing import Sequence
 import flax.linen as nn
 import jax
 import jax.numpy as jnp
+import numpy as np
 
+from jaxbridge.core.observations import token_slots
 from jaxbridge.learn.q_bridge import SplitInput, UniformDense, mlp
 
 
@@ -117,3 +119,12 @@ def attention(net: ObjectQNetwork, variables, observation: jax.Array) -> jax.Arr
     params = params["member"] if net.ensemble == 1 else jax.tree.map(lambda x: x[0], params["members"])
     member = ObjectQMember(*net.fields(), parent=None)
     return member.encoder(parent=None).apply({"params": params["attention"]}, member.tokens(observation))[1]
+
+
+def slot_weights(env, net: ObjectQNetwork, q, features: jax.Array) -> np.ndarray:
+    """float[T, B, N]: how much each episode's network (q: per-episode parameters [B, ...]) attends to each
+    object slot of its observations (features [T, B, tokens]); zero for slots that are not tokens."""
+    weights = np.asarray(jax.vmap(lambda q, f: attention(net, q, f), in_axes=(0, 1), out_axes=1)(q, features))
+    slots = np.zeros(weights.shape[:-1] + (env.num_objects,), np.float32)
+    slots[..., token_slots(env)] = weights
+    return slots

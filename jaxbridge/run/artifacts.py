@@ -1,4 +1,5 @@
-"""The run directory: metrics CSV, summary JSON, config JSON and the learning-curve figure.
+"""The run directory: metrics CSV, summary JSON, config JSON and the learning-curve figure (drawn by
+viz/figures.py).
 
 Every file is written atomically (jaxbridge/utils/files.py).
 """
@@ -13,6 +14,7 @@ import numpy as np
 
 from jaxbridge.utils import stats
 from jaxbridge.utils.files import write_atomic
+from jaxbridge.viz.figures import plot_curves
 from jaxbridge.utils.smoothing import smooth
 
 METRIC_FIELDS = ("test_solve_rate", "train_success_rate", "train_env_steps", "train_decisions", "test_env_steps",
@@ -92,44 +94,6 @@ def summary(history: list, seeds: list[int], elapsed_s: float, devices: str | No
         "bridge_decisions_total": int(arrays["train_decisions"].sum()),
         "table_misses_total": int(arrays["table_misses"].sum()),
     }
-
-
-PANELS = (("test_solve_rate", "test solve rate per cycle", "fraction of the 10 test tasks solved"),
-          ("test_smooth_reward", "test smooth reward", "smooth reward (25-cycle window / 25)"),
-          ("train_smooth_reward", "training smooth reward", None))
-
-
-def plot_curves(curves: dict[str, dict[str, dict[str, np.ndarray]]], title: str) -> bytes:
-    """PNG of the paper's figure and the tables' quantity: the per-cycle test solve rate (what the tables
-    report), and the test and training smooth reward vs cycle (the paper's curves); one line per approach
-    (mean over seeds), its 95% bootstrap interval as a band and the lowest to highest seed as a lighter
-    one; the legend beside the panels, clear of the lines. curves: {label: curve_statistics(...)}."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, len(PANELS), figsize=(15, 4), sharey=True)
-    for ax, (key, name, ylabel) in zip(axes, PANELS):
-        for label, described in curves.items():
-            values = described[key]
-            x = np.arange(1, len(values["mean"]) + 1)
-            line, = ax.plot(x, values["mean"], label=label)
-            ax.fill_between(x, values["mean_low"], values["mean_high"], color=line.get_color(), alpha=0.3, lw=0)
-            ax.fill_between(x, values["min"], values["max"], color=line.get_color(), alpha=0.08, lw=0)
-        ax.set_xlabel("online learning cycle")
-        ax.set_title(name)
-        ax.set_ylim(-0.02, 1.02)
-        ax.grid(alpha=0.3)
-        if ylabel:
-            ax.set_ylabel(ylabel)
-            ax.yaxis.set_tick_params(labelleft=True)
-    axes[-1].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False, fontsize=9)
-    fig.suptitle(title + "; mean, 95% CI (dark band), min-max (light band)", fontsize=10)
-    fig.tight_layout()
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
-    plt.close(fig)
-    return buffer.getvalue()
 
 
 def write_run_files(run_dir: Path, config_dict: dict, history: list, info: dict, label: str = "ours") -> None:

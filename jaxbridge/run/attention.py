@@ -7,9 +7,8 @@ from dataclasses import dataclass
 import jax
 import numpy as np
 
-from jaxbridge.core.observations import token_slots
 from jaxbridge.core.tasks import TaskBatch
-from jaxbridge.learn.object_q import ObjectQNetwork, attention
+from jaxbridge.learn.object_q import ObjectQNetwork, slot_weights
 from jaxbridge.run.evaluate import TrainedPolicy, batch_rollout
 
 
@@ -26,15 +25,6 @@ class Attention:
         """Over every such decision of every seed."""
         total = self.decisions.sum()
         return float(np.nansum(self.agreement * self.decisions) / total) if total else float("nan")
-
-
-def slot_weights(env, net: ObjectQNetwork, q, features: jax.Array) -> np.ndarray:
-    """float[T, B, N]: how much each episode's network (q: per-episode parameters [B, ...]) attends to each
-    object slot of its observations (features [T, B, tokens]); zero for slots that are not tokens."""
-    weights = np.asarray(jax.vmap(lambda q, f: attention(net, q, f), in_axes=(0, 1), out_axes=1)(q, features))
-    slots = np.zeros(weights.shape[:-1] + (env.num_objects,), np.float32)
-    slots[..., token_slots(env)] = weights
-    return slots
 
 
 def attention_agreement(policy: TrainedPolicy, batch: TaskBatch, rollout_seed: int = 0) -> Attention:

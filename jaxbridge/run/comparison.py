@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from jaxbridge.learn.approaches import get_approach
-from jaxbridge.run.artifacts import REPORT_CYCLES, STATISTICS_NOTE, curve_statistics, plot_curves, report_cells
+from jaxbridge.run.artifacts import REPORT_CYCLES, STATISTICS_NOTE, curve_statistics, report_cells
+from jaxbridge.viz.figures import plot_curves
 from jaxbridge.utils import stats
 from jaxbridge.utils.files import write_atomic
 

@@ -112,32 +112,3 @@ def sweep_csv(result: SweepResult) -> str:
                 value = "" if np.isnan(rate[i, j]) else f"{rate[i, j]:.4f}"
                 writer.writerow([label, seed, k, result.tasks_per_count, value])
     return out.getvalue()
-
-
-def plot_sweep(result: SweepResult, title: str) -> bytes:
-    """PNG: solve rate vs count, one line per label (mean over seeds) with its 95% bootstrap interval as a
-    band and the lowest to the highest seed as a lighter one."""
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(10, 4.2))
-    ax = fig.add_subplot()
-    x = np.asarray(result.counts)
-    for label, rate in result.solve_rate.items():
-        if np.isnan(rate).all():  # listed, so that a missing line is explained
-            ax.plot([], [], " ", label=f"{label}: n/a (its full-state input is too small)")
-            continue
-        line, = ax.plot(x, rate.mean(0), marker="o", markersize=3, label=f"{label} ({rate.shape[0]} seeds)")
-        low, high = stats.bootstrap_ci(rate)  # NaN at counts the approach cannot see: nothing drawn there
-        ax.fill_between(x, low, high, color=line.get_color(), alpha=0.3, lw=0)
-        ax.fill_between(x, rate.min(0), rate.max(0), color=line.get_color(), alpha=0.08, lw=0)
-    ax.set_xlabel(f"number of {result.counted} ({result.setting})")
-    ax.set_ylabel(f"test solve rate ({result.tasks_per_count} tasks per point and seed)")
-    ax.set_xticks(x)
-    ax.set_ylim(-0.02, 1.02)
-    ax.grid(alpha=0.3)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)  # clear of the lines
-    ax.set_title(title, fontsize=10)
-    fig.tight_layout()
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
-    return buffer.getvalue()

@@ -25,7 +25,7 @@ from envs_jax.drawing import Drawer, EpisodeTrace, attention_marks, draw_path, m
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.meta_policy import Controls, EpisodeResult, rollout
 from jaxbridge.core.tasks import TaskBatch
-from jaxbridge.run.attention import slot_weights
+from jaxbridge.learn.object_q import slot_weights
 from jaxbridge.viz.episodes import bridge_choices
 
 
