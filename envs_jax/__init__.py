@@ -9,14 +9,15 @@ from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Brid
 from envs_jax.coffee import Coffee, CoffeeDistractor
 from envs_jax.doorknobs import Doorknobs
 from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchPanel
-from envs_jax.registry import BUILTIN, VARIANTS, env_class, is_builtin, register, registered
+from envs_jax.light_switch_door.sequence import LightSwitchSequence
+from envs_jax.registry import BUILTIN, KNOBS, VARIANTS, env_class, is_builtin, register, registered
 
-# The names in BUILTIN + VARIANTS; that each is its class's name is checked by tests/test_env_plugins.py
-# (not here: registered() also lists installed packages' entry points).
-for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel, CoffeeDistractor):
+# The names in BUILTIN + VARIANTS (+ KNOBS); that each is its class's name is checked by tests/test_env_plugins.py
+# (tests/test_fix_length.py for KNOBS; not here: registered() also lists installed packages' entry points).
+for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel, CoffeeDistractor, LightSwitchSequence):
     register(_cls.name, _cls)
 
-__all__ = ["BUILTIN", "VARIANTS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
+__all__ = ["BUILTIN", "KNOBS", "VARIANTS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
            "NoveltySweep", "Objects", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee", "LightSwitchPanel",
-           "CoffeeDistractor",
+           "CoffeeDistractor", "LightSwitchSequence",
            "env_class", "is_builtin", "register", "registered"]
