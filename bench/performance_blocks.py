@@ -5,7 +5,8 @@ from __future__ import annotations
 import json
 
 from bench.records import BENCH, QUICKSTART, RECORDS, SUITE, SUITE_CLAIMS, authors_seed_run_s
-from bench.results_blocks import ENV_TITLES, ENVS, commit_text, env_record, label, machine_text, stat_row
+from bench.results_blocks import (ENV_TITLES, ENVS, PRESET_RUN, commit_text, env_record, label, machine_text,
+                                  stat_row)
 
 MISSING = "_Not measured yet: `{command}`._\n"
 
@@ -150,6 +151,12 @@ def readme_quickstart() -> str:
             f"path moves single seeds) and writes `runs/light_switch_door/`:\n")
 
 
+def protocol_note(record: dict) -> str:
+    """Where the preset's runs are tested on another of the env's test-task distributions, which."""
+    protocols = record["run"]["test_protocols"]
+    return "" if protocols["authors_preset"] == protocols["main"] else f", on its {protocols['authors_preset']} test tasks"
+
+
 def readme_env(env: str) -> str:
     """The README's line for `env`: its quick start's time and its test-seed headline."""
     quick = (read(QUICKSTART) or {}).get(env)
@@ -160,10 +167,12 @@ def readme_env(env: str) -> str:
               else f"`python train.py --env {env} --num-seeds 8`")
     if record is None:
         return f"* {ENV_TITLES[env]} (`{env}`): {trains}; its test-seed headline is not generated yet.\n"
-    ours = stat_row(record, "ours")
+    ours, preset = stat_row(record, "ours"), stat_row(record, PRESET_RUN)
     return (f"* {ENV_TITLES[env]} (`{env}`): {trains}. On the {ours['seeds']} test seeds ({record['run']['seeds']}) "
             f"ours' mean test solve rate is {ours['at10']} at cycle 10 and {ours['at100']} at cycle 100 (95% CIs); "
-            f"the oracle's ceiling on the same tasks is {ours['ceiling']} (docs/RESULTS.md).\n")
+            f"with the authors' settings (`--preset authors`{protocol_note(record)}) {preset['at10']} and "
+            f"{preset['at100']}; the oracle's "
+            f"ceiling on the same tasks is {ours['ceiling']} (docs/RESULTS.md).\n")
 
 
 BLOCKS = {"performance gpu": gpu_table, "performance quickstart": quickstart_table, "performance paper": paper_table,

@@ -17,11 +17,11 @@ import argparse
 import re
 import sys
 
-from bench import performance_blocks, results_blocks
+from bench import claims, performance_blocks, results_blocks
 from bench.records import ROOT
 
 DOCS = ("README.md", "docs/RESULTS.md", "docs/PERFORMANCE.md", "docs/results/generalisation.md")
-BLOCKS = {**results_blocks.BLOCKS, **performance_blocks.BLOCKS}
+BLOCKS = {**results_blocks.BLOCKS, **performance_blocks.BLOCKS, "claims": claims.claims_table}
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[\w ]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
 
 

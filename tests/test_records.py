@@ -49,3 +49,17 @@ def test_a_finished_step_is_not_run_again_and_keeps_the_commit_it_ran_at(tmp_pat
     assert again.run("train", lambda: calls.append(2) or {"wall_s": 9.0}) == first
     assert calls == [1]
     assert json.loads((tmp_path / "steps.json").read_text()) == {"train": first}
+
+
+def test_a_claims_verdict_follows_its_stated_rule():
+    from bench import claims
+    row = lambda mean, low, high: {"test_solve_rate_mean": mean, "test_solve_rate_mean_low": low, "test_solve_rate_mean_high": high}
+    steady = {c: row(0.95, 0.85, 1.0) for c in range(1, 101)}
+    assert claims.converges(steady)[1]
+    assert not claims.converges({**steady, 60: row(0.95, 0.75, 1.0)})[1]  # an interval dips below 0.8 after 40
+    assert claims.converges({**steady, 39: row(0.2, 0.1, 0.3)})[1]  # before cycle 40 it may still learn
+    apart, overlapping = {c: row(0.3, 0.2, 0.4) for c in steady}, {c: row(0.8, 0.7, 0.9) for c in steady}
+    assert claims.above(steady, {"random": apart}, 100)[1] and not claims.above(steady, {"random": overlapping}, 100)[1]
+    yes, no = ("", True), ("", False)
+    assert [claims.verdict(*pair) for pair in ((yes, yes), (yes, no), (no, yes), (yes, None), (None, None))] == [
+        "reproduced", "reproduced with our departures", "not reproduced", "reproduced", "not reproduced"]
