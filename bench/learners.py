@@ -10,7 +10,7 @@ Steps, each as a user runs it (child processes; wall time and peak memory record
      Switch Door's tuning seeds 0-7: jaxbridge/core/presets.py).
 It writes learners.csv (each learner's statistics at every cycle), learners.png and learners.json (commit,
 commands, times, peak memory, machine) into docs/results/E/; `python -m bench.render` puts the table into
-docs/RESULTS.md. A finished step is not run again (E-steps.json in the runs directory), and training resumes
+docs/results/learners.md. A finished step is not run again (E-steps.json in the runs directory), and training resumes
 from its checkpoints.
 """
 from __future__ import annotations

@@ -12,7 +12,7 @@ Steps, each as a user runs it (child processes; wall time and peak memory record
   2. eval.py RUN --sweep novelties: their final bridges on more and more novelties.
 It writes plan_repair.csv (every run's statistics at every cycle), plan_repair_sweep.csv,
 plan_repair.png, plan_repair_sweep.png and plan_repair.json (commit, commands, times, machine) into
-docs/results/E/; `python -m bench.render` puts the table into docs/RESULTS.md. A finished step is not
+docs/results/E/; `python -m bench.render` puts the table into docs/results/plan_repair.md. A finished step is not
 run again (E-steps.json in the runs directory), and training resumes from its checkpoints.
 """
 from __future__ import annotations

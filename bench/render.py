@@ -20,7 +20,8 @@ import sys
 from bench import claims, performance_blocks, results_blocks
 from bench.records import ROOT
 
-DOCS = ("README.md", "docs/RESULTS.md", "docs/PERFORMANCE.md", "docs/results/generalisation.md")
+DOCS = ("README.md", "docs/RESULTS.md", "docs/PERFORMANCE.md", "docs/results/generalisation.md", "docs/results/plan_repair.md",
+        "docs/results/learners.md", "docs/results/selection.md")
 BLOCKS = {**results_blocks.BLOCKS, **performance_blocks.BLOCKS, "claims": claims.claims_table}
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[\w ]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
 

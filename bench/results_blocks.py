@@ -1,4 +1,4 @@
-"""The blocks of docs/RESULTS.md and docs/results/generalisation.md: each env's headline table and its
+"""The blocks of docs/RESULTS.md and the study pages under docs/results/: each env's headline table and its
 generalisation sweep, from bench.paper's records and the authors' logged numbers."""
 from __future__ import annotations
 
@@ -238,7 +238,7 @@ def novelty_table(env: str, sweep_rows: list[dict], seeds: str, command: str) ->
 
 
 def plan_repair(env: str) -> str:
-    """RESULTS.md's plan-repair table for `env`: ours and the two plan-repair baselines on the test seeds,
+    """docs/results/plan_repair.md's table for `env`: ours and the two plan-repair baselines on the test seeds,
     then their generalisation sweep (bench.plan_repair's records)."""
     folder = RECORDS / env
     run = read_json(folder / "plan_repair.json")
@@ -250,7 +250,7 @@ def plan_repair(env: str) -> str:
              "over seeds, IQM [95% CI] beside it.", "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
     lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, "
-              f"{commit_text(run)}.", "", f"![{ENV_TITLES[env]}, plan repair](results/{env}/plan_repair.png)", "",
+              f"{commit_text(run)}.", "", f"![{ENV_TITLES[env]}, plan repair]({env}/plan_repair.png)", "",
               novelty_table(env, read_csv(folder / "plan_repair_sweep.csv"), run["seeds"], run["steps"]["sweep"]["command"])]
     return "\n".join(lines)
 
@@ -261,7 +261,7 @@ def cycles_to(cycles: dict[int, dict], level: float = 0.9) -> str:
 
 
 def learners(env: str) -> str:
-    """RESULTS.md's table of ours with each learner on `env`'s test seeds (bench.learners' records): test
+    """docs/results/learners.md's table of ours with each learner on `env`'s test seeds (bench.learners' records): test
     solve rates, cycles to a mean of 0.9, each run's seconds per cycle and peak memory."""
     folder = RECORDS / env
     run = read_json(folder / "learners.json")
@@ -278,7 +278,7 @@ def learners(env: str) -> str:
         step = run["steps"][name]
         lines.append(f"| {shown[name]} | {cycles_to(cycles)} | {step['wall_s'] / last:.2f} | {step['peak_rss_mib']:,.0f} |")
     lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (the two trainings "
-              f"one after another), {commit_text(run)}.", "", f"![{ENV_TITLES[env]}, learners](results/{env}/learners.png)", ""]
+              f"one after another), {commit_text(run)}.", "", f"![{ENV_TITLES[env]}, learners]({env}/learners.png)", ""]
     return "\n".join(lines)
 
 
@@ -318,7 +318,7 @@ def attention_text(line: str) -> str:
 
 
 def selection(env: str) -> str:
-    """RESULTS.md's table of the selections on `env`'s test seeds (bench.selection's records): test solve
+    """docs/results/selection.md's table of the selections on `env`'s test seeds (bench.selection's records): test solve
     rates, what the learned selector looks at, its cost, and each bar of issue 37 measured."""
     folder = RECORDS / env
     run = read_json(folder / "selection.json")
@@ -352,7 +352,7 @@ def selection(env: str) -> str:
               f"* What it looks at (test tasks, greedy; `{run['steps']['attention']['command']}`): "
               f"{attention_text(run['attention'])}.",
               "", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",
-              "", f"![{ENV_TITLES[env]}, selections](results/{env}/selection.png)", "",
+              "", f"![{ENV_TITLES[env]}, selections]({env}/selection.png)", "",
               novelty_table(env, sweep_rows, run["seeds"], run["steps"]["sweep"]["command"])]
     return "\n".join(lines)
 

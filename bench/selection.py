@@ -18,7 +18,7 @@ Steps, each as a user runs it (child processes; wall time and peak memory record
      bridge decision is the one the env's fix acts on.
 It writes selection.csv, selection_sweep.csv, selection.png, selection_sweep.png and selection.json
 (commit, commands, times, peak memory, the cost line, the attention line, machine) into
-docs/results/E/; `python -m bench.render` puts the tables into docs/RESULTS.md. A finished step is not
+docs/results/E/; `python -m bench.render` puts the tables into docs/results/selection.md. A finished step is not
 run again (E-steps.json in the runs directory), and training resumes from its checkpoints.
 """
 from __future__ import annotations
