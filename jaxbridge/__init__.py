@@ -2,8 +2,9 @@
 
 Floors, each importing only those below it (docs/DESIGN.md): `utils` (files, the smooth reward, CLI
 plumbing, the compile cache) < `core` (config, the meta-policy, bridges, task batches, `check_env`) <
-`learn` (Q-network, double DQN, replay, approaches, the resolved `Setup`, the jitted cycle) < `run`
-(training loop, experiments, checkpoints, run files, evaluation, sweeps) < `viz` (episode pictures) <
+`learn` (Q-network, double DQN, replay, approaches, the resolved `Setup`, the jitted cycle) < `viz`
+(figures and episode pictures) < `run` (training loop, experiments, checkpoints, run files, evaluation,
+sweeps) <
 `api` (the Python API below, what train.py and eval.py call). The envs (`envs_jax`) and
 the planner (`planner`) sit below.
 

@@ -1,5 +1,5 @@
 """Doorknobs' motion without a sampling planner: the robot follows its room's precomputed roadmap
-(docs/DESIGN.md, "Doorknobs choices") toward a doorway, seeing only the waypoints in its line of sight."""
+(docs/design/envs.md, "Doorknobs choices") toward a doorway, seeing only the waypoints in its line of sight."""
 from __future__ import annotations
 
 import jax

@@ -1,6 +1,6 @@
 """Light Switch Sequence: Light Switch Door whose one door has a combination lock of k dials, a knob
 for the length of the fix (the paper's third limitation: epsilon-greedy exploration works for short
-fixes, probably not for long ones; docs/DESIGN.md, "Light Switch Sequence").
+fixes, probably not for long ones; docs/design/envs.md, "Light Switch Sequence").
 
 A row of cells; the robot starts in cell 0 and must switch on the light in the last cell, as in Light
 Switch Door. The novelty: one door, in cell d, with a lock of k dials. The closed door stops the robot

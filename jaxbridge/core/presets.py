@@ -7,7 +7,7 @@
   values below, then the env's `authors_defaults` (its n_sample, its test tasks, its env quirks). Flags given on the
   command line still override a preset's values.
 
-Departures the preset cannot switch are listed in docs/DESIGN.md, "Departures" (e.g. the stale
+Departures the preset cannot switch are listed in docs/design/approaches.md, "Departures" (e.g. the stale
 relabelling globals, epsilon's per-decision decay).
 """
 from __future__ import annotations

@@ -88,7 +88,7 @@ LOW_LEVEL = {a.name: a for a in (
                                 ("_callplanner", " + CallPlanner", "; one more action dimension hands control to the planner"),
                                 ("_full_state", ", full state", "; it sees every object's raw features")))}
 
-# The comparison the paper says it lacks (issue 38; docs/DESIGN.md, "Plan repair"): the bridge's reward
+# The comparison the paper says it lacks (issue 38; docs/design/approaches.md, "Plan repair"): the bridge's reward
 # comes from the plan it got stuck in (RAPid-Learn style: a cost per step, a reward on reaching a later
 # state of that plan, which ends its problem), with no CallPlanner; then the plan resumes from the
 # state reached, or the planner replans. Not among "all".

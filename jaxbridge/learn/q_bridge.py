@@ -144,7 +144,7 @@ class QNetwork(nn.Module):
     """MLP with leaky-ReLU hidden layers and a scalar output; optionally an ensemble of such MLPs whose
     value is their minimum (clipped double Q).
 
-    Departures from the authors' ReLU network (docs/DESIGN.md, Learning): the leaky slope keeps units
+    Departures from the authors' ReLU network (docs/design/learning.md): the leaky slope keeps units
     alive under mostly-zero targets, the output layer starts at zero (so the untrained Q is 0; theirs
     starts uniform as PyTorch's default, `output_init`),
     and with `ensemble` > 1 members fitted to the same targets give their minimum, in the argmax and the
@@ -206,7 +206,7 @@ def encode(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Ar
 
 
 # Observations at least this wide (the full-state ablations) enter the candidates' Q as a SplitInput: their
-# first-layer share is computed once per decision. Narrower features stay whole (docs/DESIGN.md, Learning).
+# first-layer share is computed once per decision. Narrower features stay whole (docs/design/learning.md).
 SPLIT_FROM_FEATURES = 32
 
 
