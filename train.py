@@ -8,8 +8,8 @@
 Approaches: ours (bridge policy learning), no_feature_selection, no_callplanner, random (random bridge),
 pure_planning, maple_q (pure RL); see jaxbridge/learn/approaches.py.
 
-The experiment directory (default runs/<env>) gets curves.png (test and training smooth reward of every
-approach, mean and min-max band over seeds), results.md and results.csv (test solve rate at cycles
+The experiment directory (default runs/<env>) gets curves.png (per approach: the test solve rate per cycle
+and the test and training smooth reward; mean, 95% CI and min-max bands over seeds), results.md and results.csv (test solve rate at cycles
 10/25/50/100 and the final smooth reward), and one run directory per approach with config.json,
 metrics.csv (one row per seed x cycle), summary.json, curves.png and checkpoints/ (orbax, whole learner
 state), which eval.py loads. Exit codes: 0 done, 2 bad input, 3 numerical fault, 4 cannot write (no

@@ -1,5 +1,5 @@
 """Each baseline and ablation differs from our method exactly by its defining difference
-(reference/method.md §6), checked on the rollouts it produces and on the program it compiles to."""
+(the authors' code), checked on the rollouts it produces and on the program it compiles to."""
 from collections import Counter
 from dataclasses import replace
 from pathlib import Path

@@ -20,7 +20,7 @@ from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.errors import InputError
 
 ENVS = ("light_switch_door", "doorknobs", "coffee")
-# reference/method.md §7: n_sample per env in the authors' logged runs (Coffee: configuration A).
+# the authors' code: n_sample per env in the authors' logged runs (Coffee: configuration A).
 AUTHORS_N_SAMPLE = {"light_switch_door": 100, "doorknobs": 10, "coffee": 10}
 
 

@@ -1,4 +1,4 @@
-"""Coffee: fill cups from a jug whose handle is rotated away from the robot (reference/envs.md §4)."""
+"""Coffee: fill cups from a jug whose handle is rotated away from the robot (the authors' env code)."""
 from envs_jax.coffee.distractor import CoffeeDistractor
 from envs_jax.coffee.env import Coffee
 

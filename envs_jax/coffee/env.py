@@ -1,4 +1,4 @@
-"""Coffee (the authors' `coffee`), as specified in reference/envs.md §4.
+"""Coffee (the authors' `coffee`), as the authors' code defines it.
 
 A robot arm (x, y, z, tilt, wrist, fingers) must fill every cup on the table: pick the jug up by its
 handle, place it in the coffee machine, press the machine's button (the jug fills), pick the jug up

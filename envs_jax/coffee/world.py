@@ -59,7 +59,7 @@ TWIST_TOL = 0.5  # squared: Twisting's reach around the jug top
 TRAIN_CUPS, TEST_CUPS = (1,), (1, 2, 3, 4)  # each task draws its number of cups uniformly from these
 MAX_CUPS = max(TEST_CUPS)
 TEST_HORIZON = 110  # see coffee.py: the smallest multiple of 10 the oracle bridge needs on seeds 0-7
-AUTHORS_TEST_CUPS, AUTHORS_TEST_HORIZON = (4,), 100  # the authors' logged runs (reference/method.md §9)
+AUTHORS_TEST_CUPS, AUTHORS_TEST_HORIZON = (4,), 100  # the authors' logged runs
 
 
 # ---- §4.3 task generation ------------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""Doorknobs: rooms, clutter and doors whose knobs must be turned (reference/envs.md §3)."""
+"""Doorknobs: rooms, clutter and doors whose knobs must be turned (the authors' env code)."""
 from envs_jax.doorknobs.env import Doorknobs
 
 __all__ = ["Doorknobs"]

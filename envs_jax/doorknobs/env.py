@@ -1,4 +1,4 @@
-"""Doorknobs (the authors' `doorknobs`), as specified in reference/envs.md §3.
+"""Doorknobs (the authors' `doorknobs`), as the authors' code defines it.
 
 A robot (a circle of radius 0.05) moves through a map of 1x1 rooms, around rectangular clutter, to a goal
 room. The novelty: every doorway between two rooms holds a closed door, which blocks the robot until its

@@ -1,4 +1,4 @@
-"""Light Switch Door (the authors' `grid_row_door`), as specified in reference/envs.md §2.
+"""Light Switch Door (the authors' `grid_row_door`), as the authors' code defines it.
 
 A row of cells; the robot starts in cell 0 and must switch on the light in the last cell. The novelty:
 doors. A closed door stops the robot from leaving the door's cell to the right; it opens when both of

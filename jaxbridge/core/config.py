@@ -1,5 +1,5 @@
 """Hyperparameters of a training run. The defaults are ours; each field says where the paper or the authors'
-code (reference/method.md §7) differ, and docs/DESIGN.md lists every departure."""
+code differ, and docs/DESIGN.md lists every departure."""
 from __future__ import annotations
 
 import ast

@@ -18,7 +18,7 @@ PLANNER, BRIDGE = 0, 1  # who is in control of an episode
 class Controls:
     """Which parts of the meta-policy a run uses (static: each combination compiles once).
 
-    The paper's ablations switch the first three off (reference/method.md §6); the loop guard comes from
+    The paper's ablations switch the first three off (the authors' code); the loop guard comes from
     the run's config (`Setup.controls`), so build a run's controls there, not from the approach alone."""
 
     planner: bool = True  # False: pure RL, the bridge acts from the first step and nothing plans

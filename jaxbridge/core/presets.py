@@ -3,7 +3,7 @@
 * `jaxbridge` (the default, what we recommend): TrainConfig's defaults and the env's `train_defaults`.
 * `pqn`: `jaxbridge`'s values with the PQN learner and its values tuned on tuning seeds 0-7 of Light Switch
   Door (docs/RESULTS.md, "Learners").
-* `authors`: what the authors' code did (reference/method.md §5, §7) where ours differs, per env: the
+* `authors`: what the authors' code did where ours differs, per env: the
   values below, then the env's `authors_defaults` (its n_sample, its test tasks, its env quirks). Flags given on the
   command line still override a preset's values.
 
@@ -13,11 +13,11 @@ relabelling globals, epsilon's per-decision decay).
 from __future__ import annotations
 
 PRESETS = {"jaxbridge": "ours: the defaults we recommend (docs/DESIGN.md)",
-           "authors": "the authors' code where ours differs (reference/method.md), per env",
+           "authors": "the authors' code where ours differs, per env",
            "pqn": "ours with the PQN learner and its tuned values (docs/RESULTS.md, Learners)"}
 DEFAULT_PRESET = "jaxbridge"
 
-# The authors' values for every env (reference/method.md §4.5, §5, §7).
+# The authors' values for every env.
 AUTHORS = {
     "batch_size": 64,  # their minibatches
     "n_target_sample": 1,  # one parameter sample per ground operator in a TD target's argmax

@@ -1,4 +1,4 @@
-"""The paper's six approaches, each a configuration of the same machinery (reference/method.md §6).
+"""The paper's six approaches, each a configuration of the same machinery (the authors' code).
 
 An approach is which bridge acts when the plan is stuck (the learned Q bridge, a random one, or none),
 which parts of the meta-policy it uses (`Controls`: planner, CallPlanner, feature selection) and

@@ -209,7 +209,7 @@ def relabel(dqn: DQN, hyper: Hyper, learner: DQNState, key: jax.Array, task: Tas
 
 
 def fit_scaling(dqn: DQN, buffer: ReplayBuffer, targets: jax.Array, task: TaskPart | None) -> dict:
-    """The authors' min-max scaling (reference/method.md §5) of the stored transitions' inputs and their
+    """The authors' min-max scaling of the stored transitions' inputs and their
     targets: shift = the minimum, scale = the range, at least 1; an empty buffer leaves it the identity."""
     stored = jnp.arange(buffer.capacity) < buffer.size
     data = buffer.data
@@ -265,7 +265,7 @@ def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, i
 
 def fit_until_no_better(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,
                         task: TaskPart | None) -> tuple[DQNState, jax.Array, jax.Array]:
-    """The authors' fit (reference/method.md §5): minibatch updates until `fit_patience` of them in a row
+    """The authors' fit: minibatch updates until `fit_patience` of them in a row
     found no lower minibatch loss, or `updates_per_cycle` were made, then the weights that scored the
     lowest loss are restored (those a minibatch was evaluated with, before its step). Each seed stops on
     its own (a while loop); none runs while the buffer is empty. Returns as `learn`."""

@@ -1,4 +1,4 @@
-"""The learner's optimiser: global-norm gradient clipping, then Adam (the paper's; reference/method.md §7).
+"""The learner's optimiser: global-norm gradient clipping, then Adam (the paper's and the authors' code's).
 
 The arithmetic and the state are optax's `chain(clip_by_global_norm(c), adam(lr))`, operation for
 operation, except that each division of a tensor by a scalar is made elementwise: left as

@@ -74,7 +74,7 @@ def report_cells(curves: dict[str, dict[str, np.ndarray]], cycles: int) -> dict:
 
 
 def summary(history: list, seeds: list[int], elapsed_s: float, devices: str | None = None) -> dict:
-    """Headline numbers: the tables of reference/results.md for this run, as statistics over its seeds
+    """Headline numbers: the paper's tables for this run, as statistics over its seeds
     (`devices`: what ran it, e.g. "2 cpu"; informational, the numbers do not depend on it)."""
     arrays = history_arrays(history)
     curves = curve_statistics(arrays["test_solve_rate"], arrays["train_success_rate"])

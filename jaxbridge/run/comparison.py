@@ -1,5 +1,5 @@
 """The comparison of approaches in an experiment directory: the paper-style figure and the tables of
-reference/results.md (test solve rate at cycles 10/25/50/100, smooth reward at the last cycle), each
+the paper's results section (test solve rate at cycles 10/25/50/100, smooth reward at the last cycle), each
 value a mean or IQM over seeds with its 95% bootstrap interval (utils/stats).
 
 Everything is read back from each approach's metrics.csv, so the files can be rebuilt from a finished
@@ -78,7 +78,7 @@ def results_markdown(env: str, rows: list[dict]) -> str:
                          f"{stats.cell_text(cells['test_drop_final'], statistic, signed=True)} |")
         lines.append("")
     lines += [f"Statistics {STATISTICS_NOTE}; every cycle's values are in results.csv. Smooth reward at cycle c: "
-              "the sum of the solve rates of cycles c-25 .. c-1, divided by 25 (reference/results.md). The last column: "
+              "the sum of the solve rates of cycles c-25 .. c-1, divided by 25 (the paper's results section). The last column: "
               "the statistic at the last cycle minus its highest value at any cycle before (0 or above: the approach "
               "keeps what it learned; below 0: it lost that much), with the interval of that difference."]
     return "\n".join(lines) + "\n"

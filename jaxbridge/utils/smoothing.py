@@ -1,11 +1,11 @@
-"""The paper's smooth reward (reference/results.md), the statistic of its figures and tables."""
+"""The paper's smooth reward (the paper's results section), the statistic of its figures and tables."""
 from __future__ import annotations
 
 import numpy as np
 
 
 def smooth(rates: np.ndarray, window: int = 25) -> np.ndarray:
-    """The paper's smooth reward (reference/results.md): the value at cycle c (1-based) is the sum of
+    """The paper's smooth reward (the paper's results section): the value at cycle c (1-based) is the sum of
     the rates of cycles c-25 .. c-1 divided by 25, so it ramps up from 0 over the first 25 cycles and
     excludes cycle c itself. rates: [..., cycles] -> [..., cycles]."""
     cumulative = np.concatenate([np.zeros(rates.shape[:-1] + (1,)), np.cumsum(rates, axis=-1)], axis=-1)
