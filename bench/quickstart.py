@@ -26,11 +26,12 @@ def measure(env: str, out: Path) -> dict:
     step = run_child(["python", "train.py", "--env", env, "--num-seeds", "8", "--out", str(out), "--name", env])
     experiment = json.loads((out / env / "experiment.json").read_text())
     schedule = json.loads((out / env / "schedule.json").read_text())  # each device's busy seconds
+    elapsed = {a: json.loads((out / env / a / "summary.json").read_text())["elapsed_s"] for a in experiment["approaches"]}
     final = {a: round(json.loads((out / env / a / "summary.json").read_text())
                       ["per_cycle"]["test_solve_rate"]["mean"][-1], 2) for a in experiment["approaches"]}
     return {"command": f"python train.py --env {env} --num-seeds 8", "wall_s": step["wall_s"],
             "peak_rss_mib": step["peak_rss_mib"], "approaches": experiment["approaches"], "seeds": "0-7",
-            "final_test_solve_rate": final, "schedule": schedule, "commit": git_commit(), "machine": machine()}
+            "final_test_solve_rate": final, "elapsed_s": elapsed, "schedule": schedule, "commit": git_commit(), "machine": machine()}
 
 
 def main(argv=None) -> int:
