@@ -195,8 +195,12 @@ class ProgramRun:
             more = self.pool.spare(wanted)
             held.extend(more)
             return [d for share in more for d in share]
+        # The learned selector's update compiles to other last bits on another device count (a known gap,
+        # docs/DESIGN.md, Seeds over devices): widened, its numbers would depend on when a device came free.
+        invariant = not program.setup.controls.observation.tokens
         return train_settings(program.setup, [(self.named[n], d) for n, d in zip(program.names, run_dirs)],
-                              dataclasses.replace(hooks, devices=held[0], widen=widen), resume=started)
+                              dataclasses.replace(hooks, devices=held[0], widen=widen if invariant else None),
+                              resume=started)
 
     def low_level(self, setup: Setup, run_dir: Path, hooks: RunHooks) -> dict:
         from jaxbridge.run import low_level_runs  # brax: imported only when used
