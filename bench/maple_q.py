@@ -88,8 +88,9 @@ def cycle_parts(setup: Setup, learner, repeats: int) -> tuple[dict, dict]:
     @jax.jit
     def test_rollout(learner):
         greedy = bridge_params(learning, learning.greedy(learner), jnp.float32(0.0), config.num_test_tasks)
-        return rollout(setup.test_env, setup.bridge(setup.test_env), greedy, test, keys(config.num_test_tasks),
-                       setup.test.max_steps, controls=controls, shared_params=shared, host_planner=False)[0]
+        return rollout(setup.test_env, setup.bridge(setup.test_env, explores=False), greedy, test,
+                       keys(config.num_test_tasks), setup.test.max_steps, controls=controls, shared_params=shared,
+                       host_planner=False)[0]
 
     learn = jax.jit(lambda learner: learning.learn(hyper, learner, jnp.int32(1), train.tasks))
     seed_cycle = jax.jit(make_seed_cycle(setup, host_planner=False))

@@ -10,8 +10,9 @@ The full-state ablations are measured twice, with their task-constant entries sp
 pass on a fixed minibatch, clip + Adam, the polyak step; and the per-cycle relabelling of the buffer
 (whole, in ms). `dense_fb_us`: the forward and backward pass of a network whose first layer takes only
 the minibatch's stored entries and the action (a plain dense layer, no task-constant rows): what the
-split's pass would cost if the constant rows' gathers and scatters were free. The parts do not add up
-to the whole exactly: XLA fuses across them in `learn`.
+split's pass would cost if the constant rows' gathers and scatters were free. The parts run on the
+weights `learn` fits (without those of the inputs the training tasks never fill: DQN.fit_rows). The
+parts do not add up to the whole exactly: XLA fuses across them in `learn`.
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.learn.approaches import get_approach
-from jaxbridge.learn.q_bridge import SplitInput, at_task, batch_input
+from jaxbridge.learn.q_bridge import SplitInput, at_task, batch_input, input_rows
 
 
 def _seconds(fn, arg) -> float:
@@ -47,6 +48,8 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
     task = learning.task_part(tasks)
     learner = jax.tree.map(lambda x: x[0], setup.init_learners())
     learner = learner.replace(buffer=learner.buffer.replace(size=jnp.int32(fill)))  # zeros: timing only
+    whole = learner  # `learn` takes it whole; its parts run on the weights it fits (DQN.fit_rows)
+    learner = learner if learning.fit_rows is None else input_rows(learner, learning.fit_rows)
     net, optimizer = learning.net, learning.optimizer
     _, indices = dqn.minibatch_indices(config, learner)
     batch = jax.tree.map(lambda d: d[indices[0]], learner.buffer.data)
@@ -81,7 +84,7 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
     per_update = lambda s: 1e6 * s / updates
     return {
         "input": learning.stored_features,
-        "learn_us": per_update(_seconds(lambda l: dqn.learn(learning, Hyper.of(config), l, jnp.int32(0), tasks), learner)),
+        "learn_us": per_update(_seconds(lambda l: dqn.learn(learning, Hyper.of(config), l, jnp.int32(0), tasks), whole)),
         "relabel_ms": 1e3 * _seconds(lambda l: dqn.relabel(learning, Hyper.of(config), l, l.key, task), learner),
         "draws_us": per_update(_seconds(lambda l: dqn.minibatch_indices(config, l), learner)),
         "gather_encode_us": per_update(_seconds(gather_encode, jnp.float32(0))),

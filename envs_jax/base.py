@@ -295,6 +295,14 @@ class NoveltyEnv(abc.ABC):
         return np.arange(self.full_state_size)
 
     @property
+    def full_state_filled(self) -> np.ndarray:
+        """int[U]: the positions of `full_state` that a task of this env's capacity can fill, ascending; the
+        others pad it for larger tasks and are zero in all its states (Doorknobs: the slots of a 5x5 map
+        beyond a 2x2 one). A learner's fit on this env's tasks leaves their weights out, as no gradient
+        reaches them (`check_env` checks a training task leaves them zero). Default: all of them."""
+        return np.arange(self.full_state_size)
+
+    @property
     def full_state_fits(self) -> bool:
         """Whether `full_state` can hold every object of this env's capacity (S is fixed by the largest
         test task, so larger sweep tasks are beyond the full-state ablations' input)."""

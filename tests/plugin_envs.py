@@ -48,6 +48,13 @@ class StillRobot(LockedBox):
         return super().full_state_varying[1:]
 
 
+class EmptyBox(LockedBox):
+    """Claims its tasks never fill the box's position (a learner would leave its weights out of the fit)."""
+    @property
+    def full_state_filled(self):
+        return super().full_state_filled[:-1]
+
+
 NotAnEnv = object
 
 

@@ -212,6 +212,15 @@ def test_full_state_is_capacity_independent():
     assert a[:2].tolist() == pytest.approx([1.2, 0.7]) and np.count_nonzero(a) > 100
 
 
+def test_a_2x2_map_fills_only_its_rooms_slots_of_the_full_state():
+    """full_state_filled: the robot and a 2x2 map's 4 room slots of the 5x5 layout (326 of its 2027 entries;
+    a 5x5 map fills them all), and a 2x2 map's state, a knob turned and a door open, sets nothing else."""
+    assert len(ENV.full_state_filled) == 326 and np.array_equal(Doorknobs().full_state_filled, np.arange(2027))
+    state = fresh(robot=(1.2, 0.7), rot=0.4, opened=[LEFT_DOOR])
+    set_entries = np.flatnonzero(np.asarray(full_state(state)))
+    assert len(set_entries) > 100 and np.isin(set_entries, ENV.full_state_filled).all()
+
+
 # ---- task generation -------------------------------------------------------------------------------
 def connected(spec) -> bool:
     seen, queue = {spec.rooms[0]}, deque([spec.rooms[0]])

@@ -479,6 +479,46 @@ def test_a_split_learner_relabels_and_updates_as_the_unsplit_one():
     chex.assert_trees_all_close(updated[1], updated[0], atol=1e-5)
 
 
+@pytest.mark.parametrize("preset", ["jaxbridge", "authors"])  # the authors': input scaling, a new Adam, early stopping
+def test_a_fit_leaves_out_the_weights_of_the_inputs_its_training_tasks_never_fill(preset):
+    """Doorknobs trains on 2x2 maps and its full state has room for 5x5 ones: a fit trains only the weights
+    of the inputs a training task can fill (DQN.fit_rows). It fits as the learner whose split keeps the
+    rest (as task constants, zero) does, to float tolerance, and leaves the rest's weights, their Adam
+    moments, input scaling and target rows exactly as they were: no gradient reaches them."""
+    from envs_jax.doorknobs.env import Doorknobs
+    config = TrainConfig.for_env("doorknobs", preset, approach="maple_q", num_seeds=1, updates_per_cycle=20,
+                                 **({"fit_patience": 5} if preset == "authors" else {}))
+    cut = make_setup(config).learner
+    split = cut.split
+    every = replace(cut, split=replace(split, constant=tuple(sorted(split.constant + split.unfilled)), unfilled=()))
+    assert every.fit_rows is None and len(cut.fit_rows) < cut.num_features / 4
+    rng, n = np.random.default_rng(0), 300
+    items = Transition(features=rng.normal(size=(n, len(split.varying))).astype(np.float32),
+                       skill=rng.integers(0, 3, n).astype(np.int32), param=rng.uniform(-1, 1, n).astype(np.float32),
+                       reward=(rng.uniform(size=n) < 0.3).astype(np.float32), done=rng.uniform(size=n) < 0.3,
+                       next_features=None, next_num_ground=np.ones((n, 4), np.int32), task=np.zeros(n, np.int32))
+    learner = init_learner(cut, jax.random.key(3))
+    learner = learner.replace(buffer=add(learner.buffer, items, jnp.ones(n, bool)))
+    task = cut.env.task_arrays(Doorknobs.train_task(0))
+    tasks = jax.tree.map(lambda x: jnp.stack([x] * config.episodes_per_cycle), task)
+    fit = lambda learning: jax.jit(lambda l: learn(learning, Hyper.of(config), l, jnp.int32(3), tasks))(learner)
+    (after, loss, _), (reference, reference_loss, _) = fit(cut), fit(every)
+    np.testing.assert_allclose(loss, reference_loss, rtol=1e-4)
+    chex.assert_trees_all_close(after.params, reference.params, atol=1e-4)
+    unfilled = np.array(split.unfilled)
+
+    def unfilled_inputs(state):  # the first layer's kernels (weights, target, Adam's moments), the input scaling
+        return {jax.tree_util.keystr(path): leaf[..., unfilled, :] if path[-1].key == "kernel" else leaf[..., unfilled]
+                for path, leaf in jax.tree_util.tree_leaves_with_path(state)
+                if jax.tree_util.keystr(path).endswith(("['UniformDense_0']['kernel']", "['x_shift']", "['x_scale']"))}
+    before = unfilled_inputs(dqn.track_target(config, learner, jnp.int32(3)))  # the authors' target moves first
+    assert len(before) == (6 if preset == "authors" else 4)
+    chex.assert_trees_all_equal(unfilled_inputs(after), before)
+    first = lambda state: next(leaf for path, leaf in jax.tree_util.tree_leaves_with_path(state.params)
+                               if jax.tree_util.keystr(path).endswith("['UniformDense_0']['kernel']"))
+    assert not np.allclose(first(after)[..., cut.fit_rows, :], first(learner)[..., cut.fit_rows, :])  # the rest trained
+
+
 def test_rollouts_take_one_shared_network_as_they_take_a_copy_per_episode():
     """rollout(shared_params=True) gives every episode the one network and exploration rate it is passed:
     exploring at epsilon 1 (choices from the keys alone), the episodes are exactly those of per-episode copies."""

@@ -216,7 +216,8 @@ def test_minmax_scaling_is_fitted_to_the_stored_inputs_and_targets_and_scales_th
 
 def test_minmax_scaling_of_a_split_full_state_equals_scaling_the_whole_input():
     """Maple Q's split input (varying entries, the task's constants, the action) is scaled part by part as
-    the whole input would be."""
+    the whole input would be; the entries its 2x2 training maps leave unfilled are zero, and so is their
+    shift (fit_scaling's), so the split leaves them out."""
     from jaxbridge.learn.q_bridge import SplitInput, TaskPart, encode, encode_action
     config = TrainConfig.for_env("doorknobs", "authors", num_seeds=1, approach="maple_q")
     setup = make_setup(config)
@@ -226,8 +227,10 @@ def test_minmax_scaling_of_a_split_full_state_equals_scaling_the_whole_input():
     norm = {"x_shift": jnp.asarray(rng.uniform(-1, 1, width), jnp.float32),
             "x_scale": jnp.asarray(rng.uniform(1, 3, width), jnp.float32),
             "y_shift": jnp.float32(0.25), "y_scale": jnp.float32(1.5)}
+    unfilled = np.array(split.unfilled)
+    norm["x_shift"] = norm["x_shift"].at[unfilled].set(0.0)
     params = jax.tree.map(lambda p: p + 0.1 * jax.random.normal(jax.random.key(2), p.shape), learner.params)
-    full = jnp.asarray(rng.normal(size=(3, dqn.num_features)), jnp.float32)
+    full = jnp.asarray(rng.normal(size=(3, dqn.num_features)), jnp.float32).at[:, unfilled].set(0.0)
     skill, param = jnp.array([0, 1, 3], jnp.int32), jnp.array([0.5, -0.2, 0.0], jnp.float32)
     task = TaskPart(values=full[:1, np.array(split.constant)], index=jnp.zeros(3, jnp.int32), split=split)
     whole = jnp.concatenate([full.at[:, np.array(split.constant)].set(full[0, np.array(split.constant)]),
@@ -242,6 +245,8 @@ def test_minmax_scaling_of_a_split_full_state_equals_scaling_the_whole_input():
     fitted = fit_scaling(dqn, buffer, jnp.zeros(buffer.capacity), task)
     np.testing.assert_array_equal(fitted["x_shift"][np.array(split.constant)], task.values[0])
     np.testing.assert_array_equal(fitted["x_scale"][np.array(split.constant)], 1.0)
+    np.testing.assert_array_equal(fitted["x_shift"][unfilled], 0.0)
+    np.testing.assert_array_equal(fitted["x_scale"][unfilled], 1.0)
     np.testing.assert_allclose(fitted["x_shift"][np.array(split.varying)], full[:, np.array(split.varying)].min(0))
 
 

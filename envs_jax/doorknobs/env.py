@@ -336,6 +336,24 @@ class Doorknobs(NoveltyEnv):
         knobs = doors[-1] + 6 + 6 * np.arange(slots)
         return np.sort(np.concatenate([[0, 1], doors + 5, knobs + 3, knobs + 5]))
 
+    def _slots_at(self) -> tuple[np.ndarray, np.ndarray]:
+        """The slots of a 5x5 map that this capacity's rooms and doors take in `full_state` (row * 5 + col)."""
+        m = self.map_size
+        room_at = np.array([r * TEST_MAP_SIZE + c for r in range(m) for c in range(m)])
+        return room_at, (2 * room_at[:, None] + np.arange(2)).reshape(-1)
+
+    @property
+    def full_state_filled(self) -> np.ndarray:
+        # the robot, then each kind's values at this capacity's slots: full_state's layout, part by part
+        room_at, door_at = self._slots_at()
+        rooms = TEST_MAP_SIZE ** 2
+        parts, start = [np.arange(2)], 2
+        for at, width, slots in ((room_at, 2, rooms), (door_at, 6, 2 * rooms), (door_at, 6, 2 * rooms),
+                                 (room_at, 5 * WALLS_PER_ROOM, rooms), (room_at, 5 * MAX_CLUTTER, rooms)):
+            parts.append(start + (width * at[:, None] + np.arange(width)).reshape(-1))
+            start += width * slots
+        return np.concatenate(parts)
+
     def full_state(self, state: State) -> jax.Array:
         """float32[full_state_size]: robot (x, y); rooms (x, y); doors (x, y, theta, mass, friction, open);
         knobs (x, y, theta, rot, target_rot, open); walls, then clutter (x, y, width, height, theta).
@@ -343,9 +361,7 @@ class Doorknobs(NoveltyEnv):
         if not self.full_state_fits:  # a larger map's objects have no slot (they would be dropped silently)
             raise ValueError(f"the full-state observation holds maps up to {TEST_MAP_SIZE}x{TEST_MAP_SIZE}; "
                              f"this env's maps are {self.map_size}x{self.map_size}")
-        task, m, big = state.task, self.map_size, TEST_MAP_SIZE
-        room_at = np.array([r * big + c for r in range(m) for c in range(m)])  # this capacity's slot -> 5x5
-        door_at = (2 * room_at[:, None] + np.arange(2)).reshape(-1)
+        task, (room_at, door_at) = state.task, self._slots_at()
         open_ = state.door_open.astype(jnp.float32)[:, None]
         pose = task.door_rect[:, jnp.array([0, 1, 4])]
         doors = jnp.concatenate([pose, task.door_mass[:, None], task.door_friction[:, None], open_], -1)
@@ -355,7 +371,7 @@ class Doorknobs(NoveltyEnv):
             values = jnp.where(mask[..., None], values, 0.0)
             return jnp.zeros((slots,) + values.shape[1:], jnp.float32).at[at].set(values).reshape(-1)
 
-        rooms = big * big
+        rooms = TEST_MAP_SIZE ** 2
         return jnp.concatenate([
             state.robot, placed(task.room_xy, task.room_mask, room_at, rooms),
             placed(doors, task.door_mask, door_at, 2 * rooms), placed(knobs, task.door_mask, door_at, 2 * rooms),

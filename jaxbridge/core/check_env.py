@@ -3,9 +3,10 @@
 It builds tasks and checks, in order: the class attributes; the host side (task specs, capacities, task
 arrays); the planner's model (it grounds, its plan tables build, the abstraction of the initial state is
 the model's initial state); every device function (pure: jit, vmap and a second call give the same
-values; the declared shapes and dtypes); and, when the env has an oracle bridge, that it solves its own
-test tasks through the meta-policy. The first broken promise raises `EnvContractError`, one line naming
-the method and what was expected.
+values; the declared shapes and dtypes); that a training task's full state sets no entry beyond
+`full_state_filled`; and, when the env has an oracle bridge, that it solves its own test tasks through the
+meta-policy. The first broken promise raises `EnvContractError`, one line naming the method and what was
+expected.
 """
 from __future__ import annotations
 
@@ -43,6 +44,7 @@ def check_env(env_or_class: NoveltyEnv | type[NoveltyEnv], seed: int = 0, num_te
     for spec in (train_spec, *test_specs):
         _check_planner(env, spec)
     _check_device(env, [env.task_arrays(s) for s in (train_spec, *test_specs[:1])])
+    _check_filled(cls.for_tasks([train_spec]), train_spec)
     if oracle and env.has_oracle:
         _check_oracle(cls, seed, num_test_tasks)
     return cls
@@ -250,13 +252,30 @@ def _check_oracle(cls: type[NoveltyEnv], seed: int, num_test_tasks: int) -> None
     _check_varying(batch.env, records)
 
 
+def _positions(where: str, positions: Any, size: int) -> np.ndarray:
+    """A declaration of full-state positions: ascending distinct ints in [0, size)."""
+    positions = np.asarray(positions)
+    _expect(positions.ndim == 1 and np.issubdtype(positions.dtype, np.integer) and np.all(np.diff(positions) > 0)
+            and (positions.size == 0 or 0 <= positions[0] <= positions[-1] < size), where,
+            f"ascending distinct ints in [0, full_state_size = {size})", repr(positions))
+    return positions
+
+
+def _check_filled(env: NoveltyEnv, spec: Any) -> None:
+    """`full_state_filled` of the env at a training task's capacity names every entry the task's initial
+    full state sets (the learners leave the rest out of their fits on such tasks)."""
+    name = type(env).__name__
+    filled = _positions(f"{name}.full_state_filled", env.full_state_filled, env.full_state_size)
+    full = _calls(f"{name}.full_state", jax.jit(lambda task: env.full_state(env.reset(task))), env.task_arrays(spec))
+    unnamed = np.setdiff1d(np.flatnonzero(np.asarray(full)), filled)
+    _expect(unnamed.size == 0, f"{name}.full_state_filled", "every entry a training task sets",
+            f"entries {unnamed[:8].tolist()} also set in its initial state")
+
+
 def _check_varying(env: NoveltyEnv, records: Any) -> None:
     """`full_state_varying` names every entry that moved along the oracle's episodes (states [T, B])."""
-    where, size = f"{type(env).__name__}.full_state_varying", env.full_state_size
-    varying = np.asarray(env.full_state_varying)
-    _expect(varying.ndim == 1 and np.issubdtype(varying.dtype, np.integer) and np.all(np.diff(varying) > 0)
-            and (varying.size == 0 or 0 <= varying[0] <= varying[-1] < size), where,
-            f"ascending distinct ints in [0, full_state_size = {size})", repr(varying))
+    where = f"{type(env).__name__}.full_state_varying"
+    varying = _positions(where, env.full_state_varying, env.full_state_size)
     states = np.asarray(jax.jit(jax.vmap(jax.vmap(env.full_state)))(records.env_state))
     moved = (states != states[:1]) & np.asarray(records.live)[..., None]
     unnamed = np.setdiff1d(np.flatnonzero(moved.any(axis=(0, 1))), varying)

@@ -19,7 +19,8 @@ from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.object_q import ObjectQNetwork
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
-                                      candidate_skills, encode_action, input_size, task_state_split)
+                                      candidate_skills, encode_action, input_rows, input_size, task_state_split,
+                                      with_input_rows)
 from jaxbridge.learn.replay import ReplayBuffer, add, init_buffer, sample_indices
 from jaxbridge.learn.transitions import Transition, empty_transitions, for_buffer, successor_features
 
@@ -67,16 +68,30 @@ class DQN:
         """The width of an observation in the replay buffer: with a split, only its varying entries."""
         return self.num_features if self.split is None else len(self.split.varying)
 
+    @property
+    def fit_rows(self) -> np.ndarray | None:
+        """The inputs whose weights a fit trains (`learn`): all but a split observation's unfilled entries. Those
+        are zero in every training state, so no gradient reaches their weights and Adam leaves them as they
+        are; a fit without them computes the same function on fewer rows (Doorknobs' 2x2 training maps in
+        its 5x5 full state: 457 of 2032). The target net's rows stay too: in training they multiply zeros.
+        None: every input."""
+        if self.split is None or not self.split.unfilled:
+            return None
+        actions = np.arange(self.split.width, input_size(self.env, self.num_features))
+        return np.concatenate([self.split.filled, actions])
+
     def task_part(self, tasks: Any) -> TaskPart | None:
         """The task-constant entries of the training tasks `tasks` (the env's Task struct, [T]), for the
-        buffer's transitions to index (their `task`); None without a split."""
+        buffer's transitions to index (their `task`), laid out for the network on `fit_rows`; None without
+        a split."""
         if self.split is None:
             return None
         if tasks is None:
             raise ValueError("a learner with a task-constant split needs its training tasks")
         constant = np.array(self.split.constant)
         values = jax.vmap(lambda task: self.env.full_state(self.env.reset(task))[constant])(tasks)
-        return TaskPart(values=values, index=jnp.zeros((), jnp.int32), split=self.split)
+        split = self.split if self.fit_rows is None else self.split.without_unfilled()
+        return TaskPart(values=values, index=jnp.zeros((), jnp.int32), split=split)
 
     # The learner contract (learn/learner.QLearner), over the functions below.
     @property
@@ -318,13 +333,15 @@ def track_target(config: TrainConfig, learner: DQNState, decisions: jax.Array) -
 def learn(dqn: DQN, hyper: Hyper, learner: DQNState, decisions: jax.Array,
           tasks: Any = None) -> tuple[DQNState, jax.Array, jax.Array]:
     """After a cycle's episodes (`decisions` training bridge decisions): track the target net, relabel
-    the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty). `tasks`:
-    the training tasks the buffer's `task` indices refer to (needed with a split); `hyper`: the numeric
-    hyperparameters (`Hyper.of(config)`, or a cycle's slot's).
+    the buffer, then `updates_per_cycle` minibatch updates (none while the buffer is empty), on the
+    network's `fit_rows`. `tasks`: the training tasks the buffer's `task` indices refer to (needed with a
+    split); `hyper`: the numeric hyperparameters (`Hyper.of(config)`, or a cycle's slot's).
     Returns the learner, the mean loss and the largest |Q| predicted in the minibatches."""
-    config = dqn.config
+    config, rows = dqn.config, dqn.fit_rows
     task = dqn.task_part(tasks)
-    learner = track_target(config, learner, decisions)
+    whole = learner = track_target(config, learner, decisions)
+    if rows is not None:  # the fit's network, optimiser moments and scaling on the filled inputs only
+        learner = input_rows(learner, rows)
     key, k_relabel = jax.random.split(learner.key)
     targets = relabel(dqn, hyper, learner, k_relabel, task)  # with the previous cycle's scaling
     learner = learner.replace(key=key)
@@ -332,7 +349,8 @@ def learn(dqn: DQN, hyper: Hyper, learner: DQNState, decisions: jax.Array,
         learner = learner.replace(norm=fit_scaling(dqn, learner.buffer, targets, task))
     if config.reset_optimizer:  # the authors' new Adam for every cycle's fit
         learner = learner.replace(opt_state=dqn.optimizer.init(learner.params))
-    return dqn.fit(dqn, hyper, learner, targets, task)
+    learner, loss, q_abs_max = dqn.fit(dqn, hyper, learner, targets, task)
+    return (learner if rows is None else with_input_rows(whole, learner, rows)), loss, q_abs_max
 
 
 def fixed_updates(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,

@@ -22,22 +22,37 @@ from jaxbridge.core.bridges import RandomBridge
 
 @dataclass(frozen=True)
 class StateSplit:
-    """Which entries of a wide observation change within a task (`varying`) and which the task fixes
-    (`constant`): positions in the observation, in order. Static: one compilation per split."""
+    """Which entries of a wide observation change within a task (`varying`), which the task fixes
+    (`constant`) and which pad it for tasks larger than the env's (`unfilled`: zero in all its states, so
+    the first layer skips them): positions in the observation, in order. Static: one compilation per split."""
 
     varying: tuple[int, ...]
     constant: tuple[int, ...]
+    unfilled: tuple[int, ...] = ()
 
     @property
     def width(self) -> int:
-        return len(self.varying) + len(self.constant)
+        return len(self.varying) + len(self.constant) + len(self.unfilled)
+
+    @property
+    def filled(self) -> np.ndarray:
+        """The positions of the varying entries, then of the constant ones."""
+        return np.array(self.varying + self.constant, int)
+
+    def without_unfilled(self) -> StateSplit:
+        """The split of the observation cut to its `filled` entries, in their order: each part one run of
+        positions, which the first layer slices (`take_rows`)."""
+        varying = len(self.varying)
+        return StateSplit(tuple(range(varying)), tuple(range(varying, varying + len(self.constant))))
 
 
 def task_state_split(env: NoveltyEnv) -> StateSplit | None:
-    """The env's full state as varying and task-constant entries (None if nothing is constant)."""
+    """The env's full state as varying, task-constant and unfilled entries (None if nothing is fixed)."""
     varying = np.asarray(env.full_state_varying)
-    constant = np.setdiff1d(np.arange(env.full_state_size), varying)
-    return StateSplit(tuple(map(int, varying)), tuple(map(int, constant))) if len(constant) else None
+    fixed = np.setdiff1d(np.arange(env.full_state_size), varying)
+    filled = np.isin(fixed, env.full_state_filled)
+    ints = lambda positions: tuple(map(int, positions))
+    return StateSplit(ints(varying), ints(fixed[filled]), ints(fixed[~filled])) if len(fixed) else None
 
 
 @struct.dataclass
@@ -95,8 +110,16 @@ class UniformDense(nn.Module):
         if x.task is None:
             return x.observation @ kernel[:x.observation.shape[-1]] + action_share
         rows = x.task.split
-        task_share = (x.task.values @ kernel[np.array(rows.constant)])[x.task.index]  # once per task, then gathered
-        return task_share + x.observation @ kernel[np.array(rows.varying)] + action_share
+        task_share = (x.task.values @ take_rows(kernel, rows.constant))[x.task.index]  # once per task, then gathered
+        return task_share + x.observation @ take_rows(kernel, rows.varying) + action_share
+
+
+def take_rows(x: jax.Array, positions: tuple[int, ...]) -> jax.Array:
+    """x[positions]: a slice where the positions are one ascending run (a gather otherwise, dearer on CPU,
+    and so is its gradient's scatter)."""
+    if len(positions) and np.all(np.diff(positions) == 1):
+        return x[positions[0]:positions[-1] + 1]
+    return x[np.array(positions)]
 
 
 LEAKY_SLOPE = 0.01
@@ -182,6 +205,38 @@ class QNetwork(nn.Module):
                                    in_axes=nn.broadcast, length=self.ensemble)
             _, q = members_scan(self.hidden_sizes, self.activation, self.output_init, self.layer_norm)(None, x)
         return q if members else jnp.min(q, axis=0)
+
+
+FIRST_LAYER = "UniformDense_0"  # flax names an mlp's layers in order: the first takes the input
+
+
+def _input_axis(path: tuple) -> int | None:
+    """The axis of the input in a leaf of QNetwork variables at tree `path`: the first layer's kernel rows
+    (-2), the input scaling's entries (-1); None for a leaf without one."""
+    names = [getattr(key, "key", None) for key in path]
+    if names[-1] == "kernel" and FIRST_LAYER in names:
+        return -2
+    return -1 if names[-1] in ("x_shift", "x_scale") else None
+
+
+def input_rows(tree: Any, rows: np.ndarray) -> Any:
+    """`tree` (QNetwork variables, or a state holding them: a learner's, an optimiser's moments) with each
+    input-sized leaf cut to the inputs `rows`: the variables of the same network on those inputs alone."""
+    def cut(path, leaf):
+        axis = _input_axis(path)
+        return leaf if axis is None else jnp.take(leaf, rows, axis=axis)
+    return jax.tree_util.tree_map_with_path(cut, tree)
+
+
+def with_input_rows(tree: Any, cut: Any, rows: np.ndarray) -> Any:
+    """`tree` updated from `cut` (what `input_rows(tree, rows)` became): the inputs `rows` of each input-sized
+    leaf and every other leaf from `cut`, the other inputs' entries as they were."""
+    def put(path, leaf, part):
+        axis = _input_axis(path)
+        if axis is None:
+            return part
+        return leaf.at[(..., rows, slice(None)) if axis == -2 else (..., rows)].set(part)
+    return jax.tree_util.tree_map_with_path(put, tree, cut)
 
 
 def input_size(env: NoveltyEnv, num_features: int) -> int:
@@ -276,12 +331,17 @@ class QBridge:
     n_sample: int
     explore_ground_operators: bool = False  # epsilon's draw: over ground operators, not skills (RandomBridge)
     stratified: bool = True  # the candidates' parameters: stratified, or independent (sample_candidates)
+    # False: greedy whatever epsilon (the test rollouts, whose epsilon is 0): no random choice is drawn only to
+    # be dropped. Maple Q's test episodes decide at most of their steps, and those draws were nearly half their time.
+    explores: bool = True
 
     def __call__(self, params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
         k_explore, k_random, k_greedy = jax.random.split(key, 3)
         skills = candidate_skills(self.env, self.n_sample)
         greedy, _ = best_candidate(self.env, self.net, params.q, obs.features, obs.num_ground, skills, k_greedy,
                                    stratified=self.stratified)
+        if not self.explores:
+            return greedy
         explore = jax.random.uniform(k_explore) < params.epsilon
         random = RandomBridge(self.env, self.explore_ground_operators)(None, obs, k_random)
         return tree_where(explore, random, greedy)
