@@ -44,13 +44,12 @@ class Approach:
         return self.bridge is BridgeKind.LOW_LEVEL
 
     def make_bridge(self, env: NoveltyEnv, net: QNetwork, n_sample: int,
-                    explore_ground_operators: bool = False, stratified: bool = True, explores: bool = True) -> Bridge:
+                    explore_ground_operators: bool = False, stratified: bool = True) -> Bridge:
         """The approach's bridge (equal arguments give equal bridges: one compiled rollout serves them);
         `explore_ground_operators`: random draws over ground operators (RandomBridge); `stratified`: the
-        greedy argmax's parameter samples (q_bridge.sample_candidates); `explores` False: a Q bridge that
-        is greedy whatever its epsilon (QBridge.explores)."""
+        greedy argmax's parameter samples (q_bridge.sample_candidates)."""
         if self.bridge is BridgeKind.Q:
-            return QBridge(env, net, n_sample, explore_ground_operators, stratified, explores)
+            return QBridge(env, net, n_sample, explore_ground_operators, stratified)
         if self.bridge is BridgeKind.RANDOM:
             return RandomBridge(env, explore_ground_operators)
         return PurePlanningBridge(env)

@@ -70,7 +70,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     config, approach, test, learning = setup.config, setup.approach, setup.test, setup.learner
     controls = setup.controls
     train_env, test_env = setup.train_env, setup.test_env  # the task batches' envs, with the config's quirks
-    train_bridge, test_bridge = setup.bridge(train_env), setup.bridge(test_env, explores=False)
+    train_bridge, test_bridge = setup.bridge(train_env), setup.bridge(test_env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train_env.num_skills
     shared = learning.shares_network  # one copy of the seed's network for its episodes, or one each

@@ -331,17 +331,12 @@ class QBridge:
     n_sample: int
     explore_ground_operators: bool = False  # epsilon's draw: over ground operators, not skills (RandomBridge)
     stratified: bool = True  # the candidates' parameters: stratified, or independent (sample_candidates)
-    # False: greedy whatever epsilon (the test rollouts, whose epsilon is 0): no random choice is drawn only to
-    # be dropped. Maple Q's test episodes decide at most of their steps, and those draws were nearly half their time.
-    explores: bool = True
 
     def __call__(self, params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
         k_explore, k_random, k_greedy = jax.random.split(key, 3)
         skills = candidate_skills(self.env, self.n_sample)
         greedy, _ = best_candidate(self.env, self.net, params.q, obs.features, obs.num_ground, skills, k_greedy,
                                    stratified=self.stratified)
-        if not self.explores:
-            return greedy
         explore = jax.random.uniform(k_explore) < params.epsilon
         random = RandomBridge(self.env, self.explore_ground_operators)(None, obs, k_random)
         return tree_where(explore, random, greedy)

@@ -51,12 +51,11 @@ class Setup:
         """The meta-policy's parts: the approach's, with the config's loop guard."""
         return dataclasses.replace(self.approach.controls, loop_guard=self.config.loop_guard)
 
-    def bridge(self, env: NoveltyEnv, explores: bool = True) -> Bridge:
-        """The approach's bridge on `env` (equal arguments give equal bridges: one compilation); `explores`
-        False: greedy, for the test rollouts (QBridge.explores)."""
+    def bridge(self, env: NoveltyEnv) -> Bridge:
+        """The approach's bridge on `env` (equal arguments give equal bridges: one compilation)."""
         config = self.config
         return self.approach.make_bridge(env, self.learner.net, config.n_sample, config.explore_ground_operators,
-                                         config.param_samples is ParamSamples.STRATIFIED, explores)
+                                         config.param_samples is ParamSamples.STRATIFIED)
 
     def init_learners(self) -> Any:
         """One learner state per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s).
@@ -73,8 +72,7 @@ class Setup:
             from jaxbridge.learn.low_level import policy_bridge
             bridge, controls = policy_bridge(env, self.approach)
             return bridge, jax.tree.map(lambda x: x[owner], states), controls
-        return (self.bridge(env, explores=False), self.episode_params(states, owner, np.zeros(len(owner), np.float32)),
-                self.controls)
+        return self.bridge(env), self.episode_params(states, owner, np.zeros(len(owner), np.float32)), self.controls
 
     def episode_params(self, states: Any, owner: np.ndarray, eps: jax.Array) -> QBridgeParams:
         """Q-bridge parameters for a batch of episodes: episode i acts with seed owner[i]'s greedy network (of
