@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from bench.records import ENVS
-from bench.results_blocks import ENV_TITLES, PRESET_RUN, by_approach, env_record, label
+from bench.results_blocks import ENV_TITLES, PRESET_RUN, by_approach, counted_column, env_record, label
 from jaxbridge.utils import stats
 
 # (the paper's words, which envs it speaks of, the test): Section 5's results paragraph and the abstract.
@@ -54,7 +54,7 @@ def above(rows: dict[int, dict], others: dict[str, dict[int, dict]], cycle: int)
 
 
 def generalises(sweep: list[dict]) -> tuple[str, bool]:
-    counted = [k for k in sweep[0] if k not in ("line", "seed", "tasks", "solve_rate")][0]
+    counted = counted_column(sweep)
     largest = max(int(r[counted]) for r in sweep)
     rates = np.array([float(r["solve_rate"]) for r in sweep if r["line"] == "ours" and int(r[counted]) == largest])
     low, high = stats.bootstrap_ci(rates)

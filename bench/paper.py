@@ -173,7 +173,7 @@ def seed_flags(args: argparse.Namespace) -> list[str]:
 
 
 def seeds_text(args: argparse.Namespace) -> str:
-    return f"{args.seed_set}-{args.seed_set + args.num_seeds - 1}"
+    return seed_set(args.seed_set, args.num_seeds)  # checked in `begin`
 
 
 def records_folder(args: argparse.Namespace) -> Path:
@@ -207,7 +207,8 @@ def main(argv=None) -> int:
         preset_run, ["--env", env, "--approaches", "ours", "--preset", "authors", *seeds]))
     (config, approaches, _), (preset_config, _, _) = load_experiment(main_run), load_experiment(preset_run)
     protocols = list(dict.fromkeys([config.test_protocol, preset_config.test_protocol]))
-    oracle = steps.run("oracle", lambda: dict(zip(("rows", "wall_s"), oracle_rows(env, protocols, list(range(args.seed_set, args.seed_set + args.num_seeds))))))
+    test_seeds = list(range(args.seed_set, args.seed_set + args.num_seeds))
+    oracle = steps.run("oracle", lambda: dict(zip(("rows", "wall_s"), oracle_rows(env, protocols, test_seeds))))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(main_run), "--sweep", "novelties"]))
 
     out = records_folder(args)
@@ -220,7 +221,8 @@ def main(argv=None) -> int:
     shutil.copy(main_run / "sweep_novelties.csv", out / "sweep.csv")
     shutil.copy(main_run / "sweep_novelties.png", out / "sweep.png")
     shutil.copy(main_run / "curves.png", out / "figure.png")
-    record = {"env": env, "commit": git_commit(), "command": command_line(args), "seeds": seeds_text(args), "approaches": approaches,
+    record = {"env": env, "commit": git_commit(), "command": command_line(args), "seeds": seeds_text(args),
+              "approaches": approaches,
               "config_version": json.loads((main_run / "ours" / "config.json").read_text())["config_version"],
               "test_protocols": {"main": protocols[0], "authors_preset": protocols[-1]},
               "steps": {"train": train, "train_authors_preset": preset,

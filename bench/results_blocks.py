@@ -220,7 +220,7 @@ def sweep_table(env: str) -> str:
 
 def novelty_table(env: str, sweep_rows: list[dict], seeds: str, command: str) -> str:
     """Solve rate per novelty count (rows) and line (columns) of a sweep.csv: mean [95% CI] over seeds."""
-    counted = [k for k in sweep_rows[0] if k not in ("line", "seed", "tasks", "solve_rate")][0]
+    counted = counted_column(sweep_rows)
     lines_by_label: dict[str, dict[int, list[float]]] = {}
     for row in sweep_rows:
         lines_by_label.setdefault(row["line"], {}).setdefault(int(row[counted]), []).append(
@@ -296,10 +296,15 @@ def seed_values(rows: list[dict], approach: str, column: str) -> np.ndarray:
     return np.array([float(r[column]) for r in sorted(rows, key=lambda r: int(r["seed"])) if r["approach"] == approach])
 
 
+def counted_column(sweep_rows: list[dict]) -> str:
+    """A sweep.csv's column of what its counts count (e.g. "doors")."""
+    return next(k for k in sweep_rows[0] if k not in ("line", "seed", "tasks", "solve_rate"))
+
+
 def sweep_ratios(sweep_rows: list[dict], line: str, reference: str) -> list[tuple[float, float, float]]:
     """Per novelty count, `line`'s mean solve rate over `reference`'s with its paired 95% interval over
     the seeds (a sweep.csv's rows; NaN where the reference solves none)."""
-    counted = [k for k in sweep_rows[0] if k not in ("line", "seed", "tasks", "solve_rate")][0]
+    counted = counted_column(sweep_rows)
     rates: dict[str, dict[int, dict[int, float]]] = {}
     for row in sweep_rows:
         rates.setdefault(row["line"], {}).setdefault(int(row[counted]), {})[int(row["seed"])] = float(row["solve_rate"] or "nan")

@@ -2,7 +2,8 @@
 costliest first; once no program waits for a share, a running program takes the shares the finished
 ones gave back at its next cycle boundary (`DevicePool.spare`), when the cycles it has left save more
 than the recompile costs (`worth_widening`). The per-seed program is the same on any number of devices
-(learn/devices.py), so where a seed ran changes none of its numbers; only the wall time."""
+(learn/devices.py), so where a seed ran changes none of its numbers, only the wall time; the learned
+selector's is not yet, so its programs are never widened (run/experiments.py)."""
 from __future__ import annotations
 
 import threading
