@@ -55,6 +55,13 @@ class EmptyBox(LockedBox):
         return super().full_state_filled[:-1]
 
 
+class NeverHolds(LockedBox):
+    """Claims its tasks never fill `holding`, which is zero at the start and set once the key is picked up."""
+    @property
+    def full_state_filled(self):
+        return np.delete(super().full_state_filled, 1)
+
+
 NotAnEnv = object
 
 

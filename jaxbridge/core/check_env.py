@@ -3,7 +3,7 @@
 It builds tasks and checks, in order: the class attributes; the host side (task specs, capacities, task
 arrays); the planner's model (it grounds, its plan tables build, the abstraction of the initial state is
 the model's initial state); every device function (pure: jit, vmap and a second call give the same
-values; the declared shapes and dtypes); that a training task's full state sets no entry beyond
+values; the declared shapes and dtypes); that a training task's states set no entry beyond
 `full_state_filled`; and, when the env has an oracle bridge, that it solves its own test tasks through the
 meta-policy. The first broken promise raises `EnvContractError`, one line naming the method and what was
 expected.
@@ -18,9 +18,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from envs_jax.base import POSITION_DIM, NoveltyEnv, SkillCall, SkillSpec
-from jaxbridge.core.bridges import OracleBridge
+from jaxbridge.core.bridges import OracleBridge, RandomBridge
 from jaxbridge.core.meta_policy import rollout
-from jaxbridge.core.tasks import evaluation_batch
+from jaxbridge.core.tasks import evaluation_batch, make_batch
 from planner.strips import Domain, Problem
 from planner.tables import compile_task, pack_atoms
 
@@ -44,7 +44,7 @@ def check_env(env_or_class: NoveltyEnv | type[NoveltyEnv], seed: int = 0, num_te
     for spec in (train_spec, *test_specs):
         _check_planner(env, spec)
     _check_device(env, [env.task_arrays(s) for s in (train_spec, *test_specs[:1])])
-    _check_filled(cls.for_tasks([train_spec]), train_spec)
+    _check_filled(cls, train_spec, seed)
     if oracle and env.has_oracle:
         _check_oracle(cls, seed, num_test_tasks)
     return cls
@@ -261,15 +261,28 @@ def _positions(where: str, positions: Any, size: int) -> np.ndarray:
     return positions
 
 
-def _check_filled(env: NoveltyEnv, spec: Any) -> None:
+def _check_filled(cls: type[NoveltyEnv], spec: Any, seed: int) -> None:
     """`full_state_filled` of the env at a training task's capacity names every entry the task's initial
-    full state sets (the learners leave the rest out of their fits on such tasks)."""
-    name = type(env).__name__
+    full state sets and, when it leaves some out, every entry set along random bridges' episodes of the
+    task (the learners neither store nor fit the rest on such tasks)."""
+    env, name = cls.for_tasks([spec]), cls.__name__
     filled = _positions(f"{name}.full_state_filled", env.full_state_filled, env.full_state_size)
     full = _calls(f"{name}.full_state", jax.jit(lambda task: env.full_state(env.reset(task))), env.task_arrays(spec))
-    unnamed = np.setdiff1d(np.flatnonzero(np.asarray(full)), filled)
+    _expect_filled(name, filled, np.asarray(full), "its initial state")
+    if filled.size == env.full_state_size:
+        return
+    batch = make_batch(cls, [spec] * 4, [seed] * 4)
+    _, records = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
+                         jax.random.split(jax.random.key(seed), batch.size), batch.max_steps, record=True)
+    states = np.asarray(jax.jit(jax.vmap(jax.vmap(batch.env.full_state)))(records.env_state))
+    _expect_filled(name, filled, states * np.asarray(records.live)[..., None], "random bridges' episodes")
+
+
+def _expect_filled(name: str, filled: np.ndarray, states: np.ndarray, where: str) -> None:
+    flat = states.reshape(-1, states.shape[-1])
+    unnamed = np.setdiff1d(np.flatnonzero((flat != 0).any(axis=0)), filled)
     _expect(unnamed.size == 0, f"{name}.full_state_filled", "every entry a training task sets",
-            f"entries {unnamed[:8].tolist()} also set in its initial state")
+            f"entries {unnamed[:8].tolist()} also set in {where}")
 
 
 def _check_varying(env: NoveltyEnv, records: Any) -> None:

@@ -24,7 +24,8 @@ from jaxbridge.core.bridges import RandomBridge
 class StateSplit:
     """Which entries of a wide observation change within a task (`varying`), which the task fixes
     (`constant`) and which pad it for tasks larger than the env's (`unfilled`: zero in all its states, so
-    the first layer skips them): positions in the observation, in order. Static: one compilation per split."""
+    the buffer does not store them and a fit leaves their weights out): positions in the observation, in
+    order. Static: one compilation per split."""
 
     varying: tuple[int, ...]
     constant: tuple[int, ...]
@@ -47,12 +48,14 @@ class StateSplit:
 
 
 def task_state_split(env: NoveltyEnv) -> StateSplit | None:
-    """The env's full state as varying, task-constant and unfilled entries (None if nothing is fixed)."""
-    varying = np.asarray(env.full_state_varying)
-    fixed = np.setdiff1d(np.arange(env.full_state_size), varying)
-    filled = np.isin(fixed, env.full_state_filled)
-    ints = lambda positions: tuple(map(int, positions))
-    return StateSplit(ints(varying), ints(fixed[filled]), ints(fixed[~filled])) if len(fixed) else None
+    """The env's full state as varying, task-constant and unfilled entries (None if every entry varies
+    and is filled). An entry this env's tasks never fill is unfilled whether or not larger tasks vary it."""
+    every = np.arange(env.full_state_size)
+    varying, filled = np.isin(every, env.full_state_varying), np.isin(every, env.full_state_filled)
+    if (varying & filled).all():
+        return None
+    positions = lambda mask: tuple(map(int, np.flatnonzero(mask)))
+    return StateSplit(positions(varying & filled), positions(~varying & filled), positions(~filled))
 
 
 @struct.dataclass
