@@ -55,6 +55,31 @@ def quickstart_table() -> str:
     return "\n".join(lines) + "\n"
 
 
+PROFILE_PARTS = (("train_rollout", "training episodes"), ("observe", "into the buffer"),
+                 ("learn", "learn (relabel + updates)"), ("test_rollout", "test episodes"), ("seed_cycle", "whole seed cycle"))
+
+
+def maple_q_table(env: str = "doorknobs") -> str:
+    """bench.maple_q's record: each part of one seed's cycle in ms, per approach, and Maple Q's ratio to ours."""
+    record = read(RECORDS / env / "maple_q_profile.json")
+    if record is None:
+        return MISSING.format(command=f"python -m bench.maple_q --env {env}")
+    figures, names = record["figures"], list(record["figures"])
+    lines = ["| part of a seed's cycle | " + " | ".join(f"{label(n)} ms" for n in names) + f" | {label(names[-1])} / "
+             f"{label(names[0])} |", "|---|" + "---|" * (len(names) + 1)]
+    for part, title in PROFILE_PARTS:
+        times = [figures[n]["ms"][part] for n in names]
+        lines.append(f"| {title} | " + " | ".join(f"{t:.1f}" for t in times) + f" | {times[-1] / times[0]:.2f}x |")
+    row = lambda title, key, of: (f"| {title} | " + " | ".join(f"{figures[n][of][key]:,}" for n in names) + " | |")
+    lines += [row("observation width", "width", "observation"), row("entries stored per transition", "stored", "observation"),
+              row("test env steps per cycle", "test_env_steps", "per_cycle"),
+              row("test bridge decisions per cycle", "test_decisions", "per_cycle")]
+    lines += ["", f"Measured by `{record['command'].strip()}` on {machine_text(record['machine'])}, {commit_text(record)}: "
+              "seed 0 on one device, each part jitted alone after the warm-up, medians over rounds that time every "
+              "approach's parts in turn."]
+    return "\n".join(lines) + "\n"
+
+
 def paper_table() -> str:
     """Each env's test-seed headline (bench.paper): the time and memory of each of its steps."""
     lines = ["| command | training (approaches x 32 seeds) | `--preset authors` | oracle | sweep | total | peak RSS |",
@@ -177,6 +202,6 @@ def readme_env(env: str) -> str:
             f"ceiling on the same tasks is {ours['ceiling']} (docs/RESULTS.md).\n")
 
 
-BLOCKS = {"performance gpu": gpu_table, "performance quickstart": quickstart_table, "performance paper": paper_table,
+BLOCKS = {"performance gpu": gpu_table, "performance maple q": maple_q_table, "performance quickstart": quickstart_table, "performance paper": paper_table,
           "performance bench": bench_table, "performance suite": suite_line, "readme quickstart": readme_quickstart,
           **{f"readme {env}": (lambda env=env: readme_env(env)) for env in ENVS}}
