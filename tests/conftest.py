@@ -10,6 +10,9 @@ from run_helpers import TEST_XLA_FLAGS
 # (a child train.py finds an earlier one's programs of the same shapes; faster reruns).
 os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", os.path.join(os.path.dirname(__file__), "..", ".jax_cache"))
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
+# The paces train.py records (utils/pace.py) go beside it, not into the user's cache: a test's short runs
+# are not this machine's training speed.
+os.environ.setdefault("JAXBRIDGE_CACHE_DIR", os.path.join(os.path.dirname(__file__), "..", ".jax_cache", "jaxbridge", "jax"))
 # Tests check behaviour, not speed: XLA's cheaper code generation cuts the suite's compile time, most
 # of its time (~30% of the whole, docs/PERFORMANCE.md). Set before JAX starts; child processes inherit it.
 os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {TEST_XLA_FLAGS}".strip()

@@ -61,6 +61,16 @@ def test_tensorboard_events_hold_each_cycles_statistics_and_the_config(short_run
     assert b"config" in next((run_dir / "events").glob("events.out.tfevents.*")).read_bytes()
 
 
+def test_a_run_records_its_pace_once_compiled(short_run):
+    """The pace a run leaves for start-up estimates: its compiling cycles apart from the seed-cycles after
+    them (a short run's seconds are mostly compilation: the start line would promise hours for minutes)."""
+    from jaxbridge.utils.pace import pace_file
+    known = json.loads(pace_file().read_text())
+    for approach in ("ours", "pure_planning"):
+        measured = known[f"light_switch_door/{approach}"]
+        assert 0 < measured["seed_cycle_s"] * 2 < measured["compile_s"]  # a compiled cycle of 2 seeds costs less
+
+
 def test_progress_into_a_log_is_plain_lines(short_run):
     """stderr is a pipe here, as under nohup or a scheduler: one plain line per reported cycle, no bar frames."""
     lines = [line for line in short_run[1].stderr.splitlines() if " cycles (" in line]
@@ -240,10 +250,11 @@ def test_the_start_line_estimates_from_this_machines_own_pace(tmp_path, monkeypa
     from jaxbridge.core.config import TrainConfig
     from jaxbridge.utils import pace
 
-    pace.record("coffee", {"ours": 0.15, "random": 0.03})  # seconds per seed-cycle measured here
-    pace.record("coffee", {"maple_q": 0.3})  # a later run adds to what is known
+    at = lambda seed_cycle_s, compile_s: {"seed_cycle_s": seed_cycle_s, "compile_s": compile_s}
+    pace.record("coffee", {"ours": at(0.15, 20), "random": at(0.03, 10)})  # measured here
+    pace.record("coffee", {"maple_q": at(0.3, 30)})  # a later run adds to what is known
     config, coffee = TrainConfig.for_env("coffee", num_seeds=8), env_class("coffee")
-    assert pace.estimate("coffee", ["ours", "random", "maple_q"], 800, workers=2) == 0.3 * 800  # the longest
-    assert pace.estimate("coffee", ["ours", "random"], 800, workers=1) == (0.15 + 0.03) * 800
+    assert pace.estimate("coffee", ["ours", "random", "maple_q"], 800, workers=2) == 30 + 0.3 * 800  # the longest
+    assert pace.estimate("coffee", ["ours", "random"], 800, workers=1) == 20 + 10 + (0.15 + 0.03) * 800
     assert pace.estimate("coffee", ["ours", "no_callplanner"], 800, workers=2) is None  # never trained here
     assert start_line(config, coffee, ["ours", "maple_q"], 2).endswith("; about 4 min at this machine's measured pace")

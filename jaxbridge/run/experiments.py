@@ -133,8 +133,8 @@ def train_approaches(experiment: Plan, experiment_dir: Path, hooks: RunHooks, re
         infos = {name: info for p in programs for name, info in zip(p.names, results[p.names[0]])}
         if primary:
             write_atomic(experiment_dir / SCHEDULE_FILE, json.dumps(pool.record(), indent=2) + "\n")
-            pace.record(config.env, {experiment.named[n].approach: info["elapsed_s"] / (config.num_seeds * info["cycles"])
-                                     for n, info in infos.items() if info and not experiment.grid})
+            pace.record(config.env, {experiment.named[n].approach: info["pace"] for n, info in infos.items()
+                                     if info and info.get("pace") and not experiment.grid})
         return {name: infos[name] for name in names}
     except WriteError:
         unwritable = True

@@ -84,7 +84,7 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], hooks
     finally:
         display.close()
         infos = write_run_files(program.group, done, elapsed(), writable)
-    return infos
+    return [info and {**info, "pace": program.pace()} for info in infos]
 
 
 class SlotProgram:
@@ -94,13 +94,27 @@ class SlotProgram:
     def __init__(self, group: RunGroup):
         self.group, self.cycle = group, Cycle(group.setup, group.slots, group.configs)
         self.first_s = self.last_s = None
+        self.compiling_s, self.device_s, self.seed_cycles = 0.0, 0.0, 0  # for the pace (`pace`)
 
     def next_cycle(self, done: Done, c: int, fault_injection: Callable | None, last_saved: int) -> Done:
         start = time.perf_counter()
         done = next_cycle(self.cycle, self.group, done, c, fault_injection, last_saved)
         self.last_s = time.perf_counter() - start
-        self.first_s = self.last_s if self.first_s is None else self.first_s
+        if self.first_s is None:
+            self.first_s = self.last_s
+            self.compiling_s += self.last_s
+        else:
+            self.device_s += self.last_s * self.group.slots.num_devices
+            self.seed_cycles += self.group.slots.num_seeds
         return done
+
+    def pace(self) -> dict | None:
+        """Device-seconds per seed-cycle once compiled, and the seconds of the cycles that compiled (each
+        with its cycle's work): a start-up estimate from a short run would otherwise be mostly compilation.
+        None before a compiled cycle was timed."""
+        if not self.seed_cycles:
+            return None
+        return {"seed_cycle_s": self.device_s / self.seed_cycles, "compile_s": self.compiling_s}
 
     def widen(self, done: Done, widen: Callable, cycles_left: int) -> Done:
         """`done` moved onto more devices, where `widen` offers some worth it (run/scheduling.py); the same

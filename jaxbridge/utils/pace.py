@@ -21,22 +21,24 @@ def _read() -> dict[str, float]:
         return {}
 
 
-def record(env: str, paces: dict[str, float]) -> None:
-    """Keep each approach's seconds per seed-cycle just measured on `env` (a cache: not written is fine)."""
-    known = {**_read(), **{f"{env}/{approach}": round(s, 4) for approach, s in paces.items()}}
+def record(env: str, paces: dict[str, dict]) -> None:
+    """Keep each approach's pace just measured on `env` ({"seed_cycle_s": device-seconds per seed-cycle once
+    compiled, "compile_s": its compiling cycles' seconds}; a cache: not written is fine)."""
+    measured = {f"{env}/{approach}": {k: round(v, 4) for k, v in p.items()} for approach, p in paces.items()}
     try:
         pace_file().parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(pace_file(), json.dumps(known, indent=1, sort_keys=True) + "\n")
+        write_atomic(pace_file(), json.dumps({**_read(), **measured}, indent=1, sort_keys=True) + "\n")
     except (OSError, WriteError):
         pass
 
 
 def estimate(env: str, approaches: list[str], seed_cycles: int, workers: int) -> float | None:
-    """Seconds for `approaches` x `seed_cycles` on `workers` cores at this machine's recorded paces: their
-    sum shared by the workers, and at least the longest one's; None unless each was measured here."""
+    """Seconds for `approaches` x `seed_cycles` on `workers` cores at this machine's recorded paces (each
+    approach's compilation, then its seed-cycles): their sum shared by the workers, and at least the longest
+    one's; None unless each was measured here."""
     known = _read()
-    seconds = [known.get(f"{env}/{approach}") for approach in approaches]
-    if None in seconds:
+    paces = [known.get(f"{env}/{approach}") for approach in approaches]
+    if not all(isinstance(p, dict) for p in paces):  # never trained here (or an older file's entry)
         return None
-    each = [s * seed_cycles for s in seconds]
+    each = [p["compile_s"] + p["seed_cycle_s"] * seed_cycles for p in paces]
     return max(max(each), sum(each) / max(1, min(workers, len(each))))
