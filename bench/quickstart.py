@@ -8,7 +8,7 @@ Runs `python train.py --env E --num-seeds 8` (the approaches of the paper's figu
 resident memory, each device's busy seconds (the run's schedule.json), what it trained and the mean test
 solve rate it reports at the last cycle per approach
 (on tuning seeds: what the quick start should print, not a claim). The README and docs/PERFORMANCE.md
-quote these records (python -m bench.render); train.py's start-up line quotes the time.
+quote these records (python -m bench.render).
 """
 from __future__ import annotations
 
