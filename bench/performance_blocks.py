@@ -6,7 +6,7 @@ import json
 
 from bench.records import BENCH, QUICKSTART, RECORDS, SUITE, SUITE_CLAIMS, authors_seed_run_s
 from bench.results_blocks import (ENV_TITLES, ENVS, PRESET_RUN, commit_text, env_record, label, machine_text,
-                                  stat_row)
+                                  rerun_command, stat_row)
 
 MISSING = "_Not measured yet: `{command}`._\n"
 
@@ -91,7 +91,7 @@ def paper_table() -> str:
             continue
         run, steps = record["run"], record["run"]["steps"]
         peak = max(steps[s]["peak_rss_mib"] for s in ("train", "train_authors_preset", "sweep"))
-        lines.append(f"| `{run['command']}` | {steps['train']['wall_s']:,.0f} s ({len(run['approaches'])} approaches) | "
+        lines.append(f"| `{rerun_command(run)}` | {steps['train']['wall_s']:,.0f} s ({len(run['approaches'])} approaches) | "
                      f"{steps['train_authors_preset']['wall_s']:,.0f} s | {steps['oracle']['wall_s']:,.0f} s | "
                      f"{steps['sweep']['wall_s']:,.0f} s | {run['wall_s']:,.0f} s | {peak / 2**10:.2f} GiB |")
     return "\n".join(lines) + "\n"

@@ -185,7 +185,7 @@ def ceiling_rows(record: dict) -> list[str]:
 def provenance(run: dict) -> str:
     """The command that made the record, its time, memory, machine and commit."""
     steps = run["steps"]
-    return (f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (training "
+    return (f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (training "
             f"{steps['train']['wall_s']:,.0f} s, peak RSS {steps['train']['peak_rss_mib'] / 2**10:.1f} GiB; "
             f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), {commit_text(run)}.")
 
@@ -214,7 +214,7 @@ def sweep_table(env: str) -> str:
     if record is None:
         return f"_Not generated yet: `python -m bench.paper --env {env}`._\n"
     run = record["run"]
-    return (novelty_table(env, record["sweep"], run["seeds"], run["steps"]["sweep"]["command"])
+    return (novelty_table(env, record["sweep"], run["seeds"], step_command(run, "sweep"))
             + f"\n![{ENV_TITLES[env]}, generalisation](./{env}/sweep.png)\n")
 
 
@@ -249,9 +249,9 @@ def plan_repair(env: str) -> str:
     lines = [f"Test seeds {run['seeds']}, {int(results[0]['seeds'])} seeds x {last} cycles; each cell: mean [95% CI] "
              "over seeds, IQM [95% CI] beside it.", "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
-    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, "
+    lines += ["", f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, "
               f"{commit_text(run)}.", "", f"![{ENV_TITLES[env]}, plan repair]({env}/plan_repair.png)", "",
-              novelty_table(env, read_csv(folder / "plan_repair_sweep.csv"), run["seeds"], run["steps"]["sweep"]["command"])]
+              novelty_table(env, read_csv(folder / "plan_repair_sweep.csv"), run["seeds"], step_command(run, "sweep"))]
     return "\n".join(lines)
 
 
@@ -277,7 +277,7 @@ def learners(env: str) -> str:
     for name, cycles in by_run.items():
         step = run["steps"][name]
         lines.append(f"| {shown[name]} | {cycles_to(cycles)} | {step['wall_s'] / last:.2f} | {step['peak_rss_mib']:,.0f} |")
-    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (the two trainings "
+    lines += ["", f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (the two trainings "
               f"one after another), {commit_text(run)}.", "", f"![{ENV_TITLES[env]}, learners]({env}/learners.png)", ""]
     return "\n".join(lines)
 
@@ -311,6 +311,21 @@ def sweep_ratios(sweep_rows: list[dict], line: str, reference: str) -> list[tupl
     paired = lambda k: [np.array([by_seed[s] for s in sorted(by_seed)]) for by_seed in (rates[line][k], rates[reference][k])]
     nan = (float("nan"),) * 3
     return [stats.ratio_ci(*paired(k)) if np.mean(paired(k)[1]) > 0 else nan for k in sorted(rates[reference])]
+
+
+def rerun_command(run: dict) -> str:
+    """The command that made a test-seed record, as a reader reruns it: the record leaves out what the ledger
+    keeps (bench.paper.test_seed_args' --change and --chosen-on), shown as placeholders for the reader's own."""
+    command = run["command"]
+    return command if "--change" in command else f"{command} --change CHANGE --chosen-on SEEDS"
+
+
+def step_command(run: dict, step: str) -> str:
+    """A step's recorded command as a reader reruns it after the record's own command: a runs folder outside
+    the repository (a temporary one) shown as that bench command's default, runs/<study>."""
+    command, study = run["steps"][step]["command"], run["command"].split()[2].removeprefix("bench.")
+    out = re.search(r"--out (/\S+)", run["steps"].get("train", {}).get("command", ""))
+    return command.replace(out.group(1), f"runs/{study}") if out else command
 
 
 def attention_text(line: str) -> str:
@@ -354,11 +369,11 @@ def selection(env: str) -> str:
               f"* Cost (`{run['steps']['cost']['command']}`: one timing run, no interval), a cycle of the learned "
               f"selection over one of ours: {bar_text(cost_ratio(run['cost']), None, 3, 'issue 55', at_least=False)}; "
               f"its peak memory, both measured in one process: {run['steps']['cost']['peak_rss_mib']:,.0f} MiB.",
-              f"* What it looks at (test tasks, greedy; `{run['steps']['attention']['command']}`): "
+              f"* What it looks at (test tasks, greedy; `{step_command(run, 'attention')}`): "
               f"{attention_text(run['attention'])}.",
-              "", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",
+              "", f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",
               "", f"![{ENV_TITLES[env]}, selections]({env}/selection.png)", "",
-              novelty_table(env, sweep_rows, run["seeds"], run["steps"]["sweep"]["command"])]
+              novelty_table(env, sweep_rows, run["seeds"], step_command(run, "sweep"))]
     return "\n".join(lines)
 
 
