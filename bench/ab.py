@@ -12,14 +12,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import os
 import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from bench.records import ROOT, run_child
+from bench.records import ROOT, cold_cache, run_child
 
 
 @contextlib.contextmanager
@@ -39,9 +38,8 @@ def checked_out(commits: dict[str, str], under: Path):
 
 def timed(tree: Path, command: list[str], out: Path) -> dict:
     """`python COMMAND --out OUT` in `tree` with a cold compilation cache: its wall time and peak memory."""
-    cache = Path(tempfile.mkdtemp(prefix="jaxbridge-ab-cache-"))
-    env = {k: v for k, v in os.environ.items() if k not in ("JAX_COMPILATION_CACHE_DIR", "XLA_FLAGS")}
-    run = run_child(["python", *command, "--out", str(out)], cwd=tree, env={**env, "JAXBRIDGE_CACHE_DIR": str(cache)})
+    with cold_cache() as env:
+        run = run_child(["python", *command, "--out", str(out)], cwd=tree, env=env)
     schedules = [json.loads(p.read_text()) for p in out.glob("*/schedule.json")]  # where the commit writes one
     return {**run, "busy": [f"{s / sched['wall_s']:.0%}" for sched in schedules for s in sched["busy_s"].values()]}
 

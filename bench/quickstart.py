@@ -4,7 +4,7 @@
     python -m bench.quickstart --envs doorknobs
 
 Runs `python train.py --env E --num-seeds 8` (the approaches of the paper's figure for E, tuning seeds
-0-7, 100 cycles) in a child process into a temporary directory (or --keep DIR), and records its wall time, its peak
+0-7, 100 cycles) in a child process with a cold compilation cache, as on a fresh clone, into a temporary directory (or --keep DIR), and records its wall time, its peak
 resident memory, each device's busy seconds (the run's schedule.json), what it trained and the mean test
 solve rate it reports at the last cycle per approach
 (on tuning seeds: what the quick start should print, not a claim). The README and docs/PERFORMANCE.md
@@ -18,12 +18,14 @@ import sys
 import tempfile
 from pathlib import Path
 
-from bench.records import DIRTY_RECORDS, ENVS, QUICKSTART, ROOT, check_clean, git_commit, machine, run_child
+from bench.records import DIRTY_RECORDS, ENVS, QUICKSTART, ROOT, check_clean, cold_cache, git_commit, machine, run_child
 
 
 def measure(env: str, out: Path) -> dict:
     """Train the env's quick start into out/ENV (which must not exist) and read back what it reports."""
-    step = run_child(["python", "train.py", "--env", env, "--num-seeds", "8", "--out", str(out), "--name", env])
+    with cold_cache() as child_env:  # as on a fresh clone
+        step = run_child(["python", "train.py", "--env", env, "--num-seeds", "8", "--out", str(out), "--name", env],
+                         env=child_env)
     experiment = json.loads((out / env / "experiment.json").read_text())
     schedule = json.loads((out / env / "schedule.json").read_text())  # each device's busy seconds
     elapsed = {a: json.loads((out / env / a / "summary.json").read_text())["elapsed_s"] for a in experiment["approaches"]}

@@ -2,13 +2,16 @@
 write records (bench.paper, bench) and the one that renders docs from them (bench.render)."""
 from __future__ import annotations
 
+import contextlib
 import csv
 import os
 import platform
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
+from typing import Iterator
 
 ROOT = Path(__file__).resolve().parents[1]
 ENVS = ("light_switch_door", "doorknobs", "coffee")  # the built-in envs every record covers
@@ -76,6 +79,15 @@ def git_commit(changed: list[str] | None = None) -> str:
 def shown(path: Path) -> str:
     """A path as the commands show it: relative to the repository root where it lies inside."""
     return str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path)
+
+
+@contextlib.contextmanager
+def cold_cache() -> Iterator[dict]:
+    """The environment of a child that compiles as on a fresh machine: an empty compilation cache of its
+    own (removed after), and none of the tests' XLA flags."""
+    with tempfile.TemporaryDirectory(prefix="jaxbridge-cold-cache-") as cache:
+        env = {k: v for k, v in os.environ.items() if k not in ("JAX_COMPILATION_CACHE_DIR", "XLA_FLAGS")}
+        yield {**env, "JAXBRIDGE_CACHE_DIR": cache}
 
 
 def run_child(command: list[str], keep_stdout: bool = False, cwd: Path = ROOT, env: dict | None = None) -> dict:
