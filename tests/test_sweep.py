@@ -103,3 +103,13 @@ def test_each_approach_keeps_one_colour_in_every_figure():
 
     assert all(colour(name) == colour(approach.label) for name, approach in KNOWN.items())
     assert len({colour(name) for name in APPROACHES}) == len(APPROACHES)  # the paper's figure: all apart
+
+
+def test_a_line_that_coincides_with_an_earlier_one_is_named():
+    from jaxbridge.viz.figures import same_as
+
+    zeros, rising = np.zeros(5), np.linspace(0, 1, 5)
+    nan_start = np.array([np.nan, 0.5, 1.0, 1.0, 1.0])
+    lines = {"pure planning": zeros, "ours": rising, "random": zeros.copy(), "late": nan_start, "late too": nan_start.copy(),
+             "almost": rising + 1e-3}
+    assert same_as(lines) == {"random": "pure planning", "late too": "late"}  # the first drawn is named
