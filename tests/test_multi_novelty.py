@@ -10,7 +10,6 @@ import pytest
 from oracle_vs_planning import oracle_and_pure_planning
 
 from envs_jax import env_class, is_builtin
-from envs_jax.multi_novelty import tasks
 from envs_jax.multi_novelty.env import FETCH, FUSE, LIFT, PUSH, MultiNovelty
 from envs_jax.multi_novelty.tasks import BOTH, KEYCARD, LATCHED, MultiNoveltyTask, task_of
 from jaxbridge.core.bridges import make_bridge
