@@ -228,3 +228,18 @@ def test_the_closest_object_rule_picks_the_door_where_the_fix_fetches_its_card()
     disagree = (np.asarray(chosen)[at_card_door] != oracle[at_card_door]).mean()
     assert disagree >= 0.25
     print(f"closest-object rule vs oracle_object at keycard stalls: {disagree:.2f} of {at_card_door.sum()}")
+
+
+def test_an_oracle_episode_draws_with_its_doors_opened_by_the_bridge_and_the_skills_objects_placed():
+    from jaxbridge.viz.animate import render_gif
+    from jaxbridge.viz.render import render_episode, trace_episodes
+    spec = MultiNovelty.test_tasks(0, 10, protocol="held_out")[0]
+    batch = make_batch(MultiNovelty, [spec], [0])
+    trace = trace_episodes(batch, make_bridge("oracle", batch.env), None, [0], seed=0)[0]
+    assert trace.success and trace.opened_by_bridge[: len(spec.door_cells)].all()
+    assert render_episode(batch.env, trace, "oracle bridge")[:8] == b"\x89PNG\r\n\x1a\n"
+    assert render_gif(batch.env, trace, "oracle bridge", max_frames=8)[:3] == b"GIF"
+    drawer, keycard = batch.env.drawer(), spec.locks.index(BOTH)
+    assert drawer.object_xy(batch.env, trace, "door", keycard, 5)[0] == spec.door_cells[keycard] + 0.5
+    assert drawer.object_xy(batch.env, trace, "key", keycard, 5)[0] == spec.key_cells[keycard] + 0.5
+    assert drawer.object_xy(batch.env, trace, "light", 0, 5)[0] == spec.num_cells - 0.5
