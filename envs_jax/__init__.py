@@ -10,14 +10,15 @@ from envs_jax.coffee import Coffee, CoffeeDistractor
 from envs_jax.doorknobs import Doorknobs
 from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchPanel
 from envs_jax.light_switch_door.sequence import LightSwitchSequence
-from envs_jax.registry import BUILTIN, KNOBS, VARIANTS, env_class, is_builtin, register, registered
+from envs_jax.multi_novelty import MultiNovelty
+from envs_jax.registry import BUILTIN, KNOBS, VARIANTS, WORLDS, env_class, is_builtin, register, registered
 
-# The names in BUILTIN + VARIANTS (+ KNOBS); that each is its class's name is checked by tests/test_env_plugins.py
-# (tests/test_fix_length.py for KNOBS; not here: registered() also lists installed packages' entry points).
-for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel, CoffeeDistractor, LightSwitchSequence):
+# The names in BUILTIN + VARIANTS (+ KNOBS, WORLDS); that each is its class's name is checked by tests/test_env_plugins.py
+# (tests/test_fix_length.py for KNOBS, tests/test_multi_novelty.py for WORLDS; not here: registered() also lists installed packages' entry points).
+for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel, CoffeeDistractor, LightSwitchSequence, MultiNovelty):
     register(_cls.name, _cls)
 
-__all__ = ["BUILTIN", "KNOBS", "VARIANTS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
+__all__ = ["BUILTIN", "KNOBS", "VARIANTS", "WORLDS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
            "NoveltySweep", "Objects", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee", "LightSwitchPanel",
-           "CoffeeDistractor", "LightSwitchSequence",
+           "CoffeeDistractor", "LightSwitchSequence", "MultiNovelty",
            "env_class", "is_builtin", "register", "registered"]
