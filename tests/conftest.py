@@ -32,7 +32,7 @@ def eval_main():
 # so a long file started last cannot leave the other worker idle at the end.
 COSTLIEST_FIRST = ("test_claims.py", "test_low_level.py", "test_learning.py", "test_cli.py", "test_scale_out.py",
                    "test_reliability.py", "test_safety.py", "test_presets.py", "test_api.py", "test_devices.py",
-                   "test_doorknobs.py", "test_env_contract.py", "test_quickstart.py", "test_learners.py", "test_object_selection.py", "test_distractors.py", "test_coffee.py", "test_plan_repair.py",
+                   "test_doorknobs.py", "test_env_contract.py", "test_quickstart.py", "test_learners.py", "test_object_selection.py", "test_distractors.py", "test_coffee.py", "test_multi_novelty.py", "test_plan_repair.py",
                    "test_env_plugins.py", "test_faults.py", "test_render.py", "test_meta_policy.py", "test_approaches.py", "test_sweep.py",
                    "test_fix_length.py", "test_optim.py", "test_light_switch_door.py")
 
