@@ -112,7 +112,7 @@ def test_a_step_discount_discounts_each_target_by_the_steps_its_transition_spans
 
 
 def test_transitions_count_the_env_steps_from_their_decision_to_the_next():
-    """Coffee's oracle: MoveToTwistJug, TwistJug to rot 0 (two wrist steps, then one up) and CallPlanner,
+    """Coffee's oracle: MoveToTwistJug, TwistJug (one wrist step, then one up) and CallPlanner,
     which runs the plan to the goal; the three spans add up to the episode after the first decision."""
     from envs_jax.coffee.env import Coffee
     batch = evaluation_batch(Coffee, [0], 1, protocol="jaxbridge")
@@ -123,7 +123,7 @@ def test_transitions_count_the_env_steps_from_their_decision_to_the_next():
     t = np.flatnonzero(np.asarray(valid))
     steps = np.asarray(transitions.steps)[t]
     assert bool(result.success[0]) and np.asarray(transitions.skill)[t].tolist() == [0, 1, batch.env.num_skills]
-    assert steps[1] == 3 and steps[0] >= 1
+    assert steps[1] == 2 and steps[0] >= 1
     assert steps.sum() == int(result.steps[0]) - t[0]
     assert episode_transitions(records, result.success[0], batch.env.num_skills)[0].steps is None
 

@@ -139,7 +139,7 @@ def test_coffee_oracle_episode_shows_the_bridge_twisting_the_jug_and_renders(cof
     assert not t.open[0, 0] and t.opened_by_bridge.tolist() == [True]
     twist = t.opened_at[0]
     np.testing.assert_allclose(t.xy[twist + 1], t.xy[twist])
-    assert drawer_for(batch.env).bridge_summary(t) == "the bridge twisted the jug from rot 1.50 to 0.00"
+    assert drawer_for(batch.env).bridge_summary(t) == "the bridge twisted the jug from rot 1.50 to 0.88"
     liquid = t.details[-1, 10:13]  # every cup ends above its target
     assert np.all(liquid > 0.75 * np.array([c[2] for c in spec.cups]))
     png = render_episode(batch.env, t, "oracle bridge")

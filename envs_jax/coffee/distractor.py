@@ -23,7 +23,9 @@ from envs_jax.coffee.world import CoffeeTask
 # and is 0.3 from the robot at the handle, against the jug's 0.42.
 DECOY_GAP = 0.3
 # The jug's x at most this: pouring holds the jug 0.96 right of a cup, and the robot at its handle must
-# stay inside the workspace (x <= 10) for the jug to reach the decoy cup.
+# stay inside the workspace (x <= 10) for the jug to reach the decoy cup. Set for the handle of a jug
+# twisted to rot 0 (straight below it); the oracle's twist to 0.88 puts it 0.32 further right, so the
+# robot stops at the wall with the jug up to 0.3 short, within the Pour skill's reach (squared 0.1).
 JUG_MAX_X = 8.3
 
 

@@ -21,6 +21,7 @@ from envs_jax.coffee.world import FINGERS, MAX_POSITION_STEP, POUR_TILT, SAFE_Z,
 MOVE_TO_TWIST_JUG, TWIST_JUG, PICK_JUG, PLACE_JUG_IN_MACHINE, TURN_MACHINE_ON, POUR = range(6)
 NEAR = 0.1  # squared distance at which a skill counts a waypoint as reached
 TWIST_RANGE = 2 * np.pi / 3  # TwistJug's parameter p in [-1, 1] asks for the absolute rotation p * 2pi/3
+WRIST_STEP = np.pi / 4  # the wrist's largest turn in one step (world.ACTION_SCALE), and so a twisted jug's
 PICK_APPROACH = 1.5  # PickJug comes down this far in front (-y) of the handle, then moves in +y onto it
 BUTTON_HEIGHT_TOL = 0.04  # squared: TurnMachineOn rises or sinks to the button's height first
 
@@ -61,7 +62,25 @@ def twist_jug(state: State, param: jax.Array) -> jax.Array:
     go straight up, which ends Twisting."""
     error = param * TWIST_RANGE - state.jug_rot
     up = move_to(state, state.robot[:3].at[Z].set(SAFE_Z))
-    return jnp.where(jnp.abs(error) < NEAR, up, _only(world.WRIST, jnp.clip(error / (np.pi / 4), -1.0, 1.0)))
+    return jnp.where(jnp.abs(error) < NEAR, up, _only(world.WRIST, jnp.clip(error / WRIST_STEP, -1.0, 1.0)))
+
+
+def fewest_steps_twist(rot: jax.Array) -> jax.Array:
+    """TwistJug's parameter that makes a jug at rotation `rot` graspable (|rot| < PICK_JUG_ROT_TOL) in the
+    fewest wrist steps; for a jug already graspable, meaningless.
+
+    `twist_jug` turns the jug by a full WRIST_STEP toward the asked rotation while it is further than one
+    step away, then lands on it. So k, the fewest steps that bring |rot| under the grasp's tolerance, is
+    also the number the twist takes for any asked rotation (on rot's side of 0) from |rot| - k WRIST_STEP,
+    where k full steps end, up to the tolerance. Ask for the middle of that interval, the rotation furthest
+    from both ends, so that a float32 rounding can neither cost a step nor leave the jug ungraspable. The
+    jug's 1.5 takes k = 1, to 0.88 (p = 0.42), where p = 0 takes two (to 0.71, then 0). The robot's wrist
+    turns with the jug and stops at +-2pi; from the stuck planner's wrist of 0 (no skill but TwistJug turns
+    it), less than |rot| of twist never meets that stop."""
+    size, tolerance = jnp.abs(rot), world.PICK_JUG_ROT_TOL
+    steps = jnp.floor((size - tolerance) / WRIST_STEP) + 1
+    after_full_steps = size - steps * WRIST_STEP
+    return jnp.sign(rot) * (after_full_steps + tolerance) / 2 / TWIST_RANGE
 
 
 def pick_jug(state: State) -> jax.Array:
