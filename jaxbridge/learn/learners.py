@@ -1,6 +1,7 @@
-"""The learners by name (`TrainConfig.learner`): each name's factory makes the learner (learn/learner.QLearner)
+"""The learners by name (`config.learner.name`): each name's factory makes the learner (learn/learner.QLearner)
 of a run from its config, the training env, the bridge's observation width and whether that observation
-is the full state. A learner of your own is `package.module:factory` (docs/NEW_LEARNER.md), or `register`ed."""
+is the full state; it reads its settings from `config.learner` (their class: core/learner_settings.py).
+A learner of your own is `package.module:factory` (docs/NEW_LEARNER.md), or `register`ed."""
 from __future__ import annotations
 
 import importlib
@@ -8,6 +9,7 @@ from typing import Callable
 
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.learner_settings import DQNSettings, register_settings
 from jaxbridge.learn import dqn, pqn
 from jaxbridge.learn.learner import QLearner
 
@@ -17,10 +19,12 @@ _REGISTRY: dict[str, LearnerFactory] = {"dqn": dqn.make_learner, "pqn": pqn.make
 
 
 def register(name: str, factory: LearnerFactory) -> None:
-    """Give a learner factory a short name for `--learner`."""
+    """Give a learner factory a short name for `--learner`, with the settings class it is marked with
+    (core/learner_settings.learner_settings; double DQN's if unmarked)."""
     if not name or ":" in name:
         raise ValueError(f"a learner name is a non-empty string without ':', got {name!r}")
     _REGISTRY[name] = factory
+    register_settings(name, getattr(factory, "settings", DQNSettings))
 
 
 def registered() -> list[str]:
