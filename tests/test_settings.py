@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from run_helpers import train as train_cli
 
 import jaxbridge
 from jaxbridge.core import grid
@@ -48,6 +49,15 @@ def test_a_preset_leaves_out_what_the_learner_lacks_and_the_hyper_leaves_are_the
     assert grid.parse_sweeps(["pqn_epochs=2,4"], pqn) == {"pqn_epochs": (2, 4)}
     with pytest.raises(ValueError, match="sets the experiment"):
         grid.parse_sweeps(["learner=dqn,pqn"])
+
+
+def test_help_lists_the_chosen_learners_settings():
+    pqn = train_cli("--help", "--learner", "pqn").stdout
+    assert "settings of learner pqn" in pqn and "q_lambda = 0.65 [leaf]" in pqn and "batch_size = " not in pqn
+    assert "batch_size = 256" in train_cli("--help").stdout  # double DQN's by default
+    assert "settings of learner pqn" in jaxbridge.settings_help(preset="pqn")  # the preset's learner
+    mc = jaxbridge.settings_help("examples.monte_carlo_q:make_learner")
+    assert "epochs = 50\n    Full-batch Adam steps per cycle." in mc and "memory = 20" in mc
 
 
 def flat(config: TrainConfig) -> dict:

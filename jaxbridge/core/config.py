@@ -144,10 +144,11 @@ class TrainConfig(Settings):
         if version < NESTED_SINCE:
             data = _nested(data)
         learner = dict(data.pop("learner"))
-        unknown = set(data) - set(_OWN) | {f"learner.{k}" for k in set(learner) - set(_names(settings_class(learner["name"])))}
+        settings = settings_class(learner["name"])
+        unknown = (set(data) - set(_OWN)) | {f"learner.{k}" for k in set(learner) - set(_names(settings))}
         if unknown:
             raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")
-        return cls(**_typed(cls, data), learner=settings_class(learner["name"])(**_typed(settings_class(learner["name"]), learner)))
+        return cls(**_typed(cls, data), learner=settings(**_typed(settings, learner)))
 
     @classmethod
     def for_env(cls, env: str, preset: str = "jaxbridge", **overrides) -> "TrainConfig":
