@@ -60,6 +60,16 @@ def test_help_lists_the_chosen_learners_settings():
     assert "epochs = 50\n    Full-batch Adam steps per cycle." in mc and "memory = 20" in mc
 
 
+def test_a_learner_registered_by_name_brings_its_settings():
+    from examples.monte_carlo_q import MonteCarloSettings, make_learner
+    from jaxbridge.learn.learners import register
+
+    register("mc_by_name", make_learner)  # what a built-in learner's registration line does
+    config = TrainConfig.for_env("light_switch_door", learner="mc_by_name", epochs=3)
+    assert type(config.learner) is MonteCarloSettings and (config.learner.epochs, config.learner.memory) == (3, 20)
+    assert TrainConfig.from_dict(json.loads(json.dumps(config.to_dict()))) == config
+
+
 def flat(config: TrainConfig) -> dict:
     """`config` as a flat config.json of version 11 held it."""
     nested = config.to_dict()

@@ -15,7 +15,7 @@ from jaxbridge.learn.learner import QLearner
 
 LearnerFactory = Callable[[TrainConfig, NoveltyEnv, int, bool], QLearner]
 
-_REGISTRY: dict[str, LearnerFactory] = {"dqn": dqn.make_learner, "pqn": pqn.make_learner}
+_REGISTRY: dict[str, LearnerFactory] = {}
 
 
 def register(name: str, factory: LearnerFactory) -> None:
@@ -25,6 +25,11 @@ def register(name: str, factory: LearnerFactory) -> None:
         raise ValueError(f"a learner name is a non-empty string without ':', got {name!r}")
     _REGISTRY[name] = factory
     register_settings(name, getattr(factory, "settings", DQNSettings))
+
+
+# The built-in learners, one line each: a factory marked with its settings class (double DQN's if unmarked).
+register("dqn", dqn.make_learner)
+register("pqn", pqn.make_learner)
 
 
 def registered() -> list[str]:
