@@ -167,12 +167,20 @@ def settings_class(spec: str) -> type[LearnerSettings]:
         return _REGISTERED[spec]
     if ":" not in spec:
         raise ValueError(f"unknown learner {spec!r}; choose from {', '.join(_REGISTERED)}, or give package.module:factory")
+    return getattr(plugin_factory(spec), "settings", DQNSettings)
+
+
+def plugin_factory(spec: str):
+    """The learner factory `package.module:factory` names, imported; ValueError in one line for a module
+    that does not import or a factory that is not there."""
     module_name, _, attribute = spec.partition(":")
     try:
         module = importlib.import_module(module_name)
     except ImportError as err:
         raise ValueError(f"learner {spec!r}: cannot import module {module_name!r} ({err})") from None
-    return getattr(getattr(module, attribute, None), "settings", DQNSettings)
+    if not callable(getattr(module, attribute, None)):
+        raise ValueError(f"learner {spec!r}: module {module_name!r} has no callable {attribute!r}")
+    return getattr(module, attribute)
 
 
 def named(settings: LearnerSettings) -> LearnerSettings:

@@ -4,12 +4,11 @@ is the full state; it reads its settings from `config.learner` (their class: cor
 A learner of your own is `package.module:factory` (docs/NEW_LEARNER.md), or `register`ed."""
 from __future__ import annotations
 
-import importlib
 from typing import Callable
 
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.learner_settings import DQNSettings, register_settings
+from jaxbridge.core.learner_settings import DQNSettings, plugin_factory, register_settings
 from jaxbridge.learn import dqn, pqn
 from jaxbridge.learn.learner import QLearner
 
@@ -42,11 +41,4 @@ def learner_factory(spec: str) -> LearnerFactory:
         return _REGISTRY[spec]
     if ":" not in spec:
         raise ValueError(f"unknown learner {spec!r}; choose from {', '.join(_REGISTRY)}, or give package.module:factory")
-    module_name, _, attribute = spec.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as err:
-        raise ValueError(f"learner {spec!r}: cannot import module {module_name!r} ({err})") from None
-    if not callable(getattr(module, attribute, None)):
-        raise ValueError(f"learner {spec!r}: module {module_name!r} has no callable {attribute!r}")
-    return getattr(module, attribute)
+    return plugin_factory(spec)
