@@ -34,7 +34,7 @@ def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = 
     with refusing():  # an unknown setting or learner, a value out of its range (e.g. a negative bonus)
         config = TrainConfig.over_preset(preset_values(given.pop("preset", TrainConfig.preset), env_cls),
                                          env=env_name(env), **given)
-    with refusing("--set"):
+    with refusing("set"):
         config = dataclasses.replace(config, **setting_values(settings or [], config))
     _check_fits_env(config, env_cls)
     return config
