@@ -57,8 +57,18 @@ def approach_list(text: str) -> list[str]:
     return names
 
 
+def chosen_learner(argv) -> tuple[str | None, str | None]:
+    """The --learner and --preset given, read before the whole parse: --help lists that learner's settings."""
+    early = argparse.ArgumentParser(add_help=False)
+    early.add_argument("--learner")
+    early.add_argument("--preset")
+    known, _ = early.parse_known_args(argv)
+    return known.learner, known.preset
+
+
 def parse_args(argv):
-    p = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
+                       epilog=jaxbridge.settings_help(*chosen_learner(argv)))
     d = DEFAULTS
     p.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(jaxbridge.env_names())}, or package.module:Class "
                                               f"for an env of your own (checked first; docs/NEW_ENV.md) (default: {d.env})")
@@ -77,8 +87,11 @@ def parse_args(argv):
                         f"the six, {', '.join(jaxbridge.APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
                         f"Doorknobs figure; by name only: {', '.join([*jaxbridge.SELECTION, *jaxbridge.PLAN_REPAIR, *jaxbridge.LOW_LEVEL])})")
     p.add_argument("--learner", metavar="NAME", help="what fits the Q-function: dqn (double DQN, the paper's), pqn (no "
-                   "replay or target network; q_lambda, pqn_epochs, pqn_minibatches take --sweep) or package.module:factory "
-                   f"(checked first; docs/NEW_LEARNER.md) (default: {d.learner})")
+                   "replay or target network) or package.module:factory (checked first; docs/NEW_LEARNER.md); "
+                   f"--help --learner NAME lists its settings below (default: {d.learner.name})")
+    p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
+                   help="set a setting of the run or of its learner by name (listed below), e.g. --set batch_size=64 "
+                        "--set hidden_sizes=64x64; repeat for more (default: the preset's values)")
     p.add_argument("--num-seeds", type=positive_int,
                    help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
     p.add_argument("--first-seed", type=non_negative_int,
@@ -103,10 +116,10 @@ def parse_args(argv):
     p.add_argument("--sweep", action="append", default=None, metavar="KEY=V1,V2,...",
                    help="train every approach at each of these values of a hyperparameter (repeat for a grid: "
                         "the cartesian product), each setting its own run directory approach@KEY=V,... with a row "
-                        "in results.md and a line in curves.png. Settings that differ only in learning_rate, gamma, grad_clip, "
-                        "call_planner_bonus, q_lambda or the epsilon schedule share one compiled program (as leaves, "
-                        "seeds x settings side by side); other keys (n_sample, hidden_sizes as 64x64, updates_per_cycle, "
-                        "polyak_tau, ...) compile one per value. Each run's numbers are a plain run's (default: none)")
+                        "in results.md and a line in curves.png. KEY: a setting of the run or of its learner (listed "
+                        "below); settings that differ only in [leaf] ones share one compiled program (seeds x settings "
+                        "side by side), other keys (n_sample, hidden_sizes as 64x64, ...) compile one per value. Each "
+                        "run's numbers are a plain run's (default: none)")
     p.add_argument("--out", type=Path, default=Path("runs"), help="parent of run directories (default: %(default)s)")
     p.add_argument("--name", default=None, help="experiment directory name under --out (default: the env name)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing experiment directory of the same name")
@@ -150,13 +163,13 @@ def main(argv=None) -> int:
     options = dict(workers=args.workers, devices=devices, progress=not args.no_progress, tensorboard=args.tensorboard)
     if args.resume is not None:
         clashing = [f"--{flag.replace('_', '-')}" for flag, value in given.items() if value is not None]
-        clashing += [f"--{flag}" for flag in ("overwrite", "name", "approaches", "sweep") if getattr(args, flag)]
+        clashing += [f"--{flag}" for flag in ("overwrite", "name", "approaches", "sweep", "set") if getattr(args, flag)]
         if clashing:
             raise jaxbridge.InputError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")
         training = jaxbridge.prepare_resume(args.resume, **options)
     else:
         training = jaxbridge.prepare(approaches=args.approaches, out=args.out, name=args.name, overwrite=args.overwrite,
-                                     sweep=args.sweep, max_memory=args.max_memory, **options, **given)
+                                     sweep=args.sweep, max_memory=args.max_memory, settings=args.set, **options, **given)
         if distributed.is_primary():  # stdout, as the closing summary: stderr carries progress and errors
             print(training.describe(), flush=True)
     try:

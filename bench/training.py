@@ -18,7 +18,7 @@ import numpy as np
 
 from bench.records import authors_seed_run_s
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.grid import FIELDS, parse_value
+from jaxbridge.core.grid import owner, parse_value
 from jaxbridge.learn.devices import SeedMesh, describe, device_count_arg, select_devices
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
@@ -60,9 +60,10 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
 
 
 def config_override(text: str) -> tuple[str, object]:
-    """argparse type of a `name=value` TrainConfig override, its value read as train.py --sweep reads it."""
+    """argparse type of a `name=value` TrainConfig override (a field of the config or of double DQN's
+    settings), its value read as train.py --sweep reads it."""
     name, sep, value = text.partition("=")
-    if not sep or name not in FIELDS:
+    if not sep or owner(TrainConfig(), name) is None:
         raise argparse.ArgumentTypeError(f"expected a TrainConfig field as name=value, got {text!r}")
     try:
         return name, parse_value(name, value)

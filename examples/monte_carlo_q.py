@@ -1,10 +1,11 @@
 """A learner of your own, written against the learner contract only (docs/NEW_LEARNER.md): Monte Carlo Q.
 
-Each cycle it fits the bridge's Q-network to the discounted returns of the decisions of its last `MEMORY`
-cycles (no bootstrapping, no target network) by `EPOCHS` full-batch Adam steps. Simple, and weaker than
+Each cycle it fits the bridge's Q-network to the discounted returns of the decisions of its last `memory`
+cycles (no bootstrapping, no target network) by `epochs` full-batch Adam steps. Simple, and weaker than
 double DQN: a return is one episode's luck. Train it with
 
-    python train.py --env light_switch_door --approaches ours --learner examples.monte_carlo_q:make_learner
+    python train.py --env light_switch_door --approaches ours --learner examples.monte_carlo_q:make_learner \
+        --set memory=10 --sweep epochs=20,50
 """
 from __future__ import annotations
 
@@ -18,11 +19,20 @@ from flax import struct
 
 from envs_jax import NoveltyEnv
 from jaxbridge import TrainConfig
+from jaxbridge.core.learner_settings import QSettings, learner_settings
+from jaxbridge.core.settings import setting
 from jaxbridge.learn.q_bridge import QNetwork, encode, input_size
 from jaxbridge.learn.transitions import Transition
 
-EPOCHS = 50  # full-batch steps per cycle
-MEMORY = 20  # cycles of decisions kept
+
+@dataclass(frozen=True)
+class MonteCarloSettings(QSettings):
+    """Its own two settings, beside the Q-network's and Adam's (QSettings: hidden_sizes, learning_rate, gamma, ...)."""
+
+    epochs: int = setting(50, low=1)
+    """Full-batch Adam steps per cycle."""
+    memory: int = setting(20, low=1)
+    """Cycles of decisions kept: the oldest cycle's are overwritten by the next."""
 
 
 @struct.dataclass
@@ -32,7 +42,7 @@ class MonteCarloState:
     key: jax.Array  # the cycle splits and replaces it
     decisions: jax.Array  # the cycle counts the training decisions here
     cycles: jax.Array  # cycles observed: the oldest cycle's rows are overwritten next
-    inputs: jax.Array  # the last MEMORY cycles' rows as network inputs, [MEMORY * episodes * steps, input]
+    inputs: jax.Array  # the last `memory` cycles' rows as network inputs, [memory * episodes * steps, input]
     returns: jax.Array  # their discounted returns
     valid: jax.Array  # which rows are decisions
 
@@ -53,15 +63,15 @@ class MonteCarloQ:
     net: QNetwork
     num_features: int
     rows: int  # episodes_per_cycle x train_steps: the rows a cycle hands `observe`
-    learning_rate: float
+    settings: MonteCarloSettings
     shares_network: bool = True
 
     def init(self, key: jax.Array) -> MonteCarloState:
         k_init, k_run = jax.random.split(key)
         width = input_size(self.env, self.num_features)
         params = self.net.init(k_init, jnp.zeros((1, width), jnp.float32))
-        rows = MEMORY * self.rows
-        return MonteCarloState(params=params, opt_state=optax.adam(self.learning_rate).init(params), key=k_run,
+        rows = self.settings.memory * self.rows
+        return MonteCarloState(params=params, opt_state=optax.adam(self.settings.learning_rate).init(params), key=k_run,
                                decisions=jnp.int32(0), cycles=jnp.int32(0), inputs=jnp.zeros((rows, width), jnp.float32),
                                returns=jnp.zeros(rows, jnp.float32), valid=jnp.zeros(rows, bool))
 
@@ -71,14 +81,14 @@ class MonteCarloQ:
     def observe(self, hyper, state: MonteCarloState, transitions: Transition, valid: jax.Array) -> MonteCarloState:
         returns = jax.vmap(discounted_returns, in_axes=(0, 0, None))(transitions, valid, hyper.gamma)
         inputs = encode(self.env, transitions.features, transitions.skill, transitions.param)
-        at = (state.cycles % MEMORY) * self.rows
+        at = (state.cycles % self.settings.memory) * self.rows
         put = lambda memory, new: jax.lax.dynamic_update_slice_in_dim(
             memory, new.reshape((self.rows,) + memory.shape[1:]), at, 0)
         return state.replace(inputs=put(state.inputs, inputs), returns=put(state.returns, returns),
                              valid=put(state.valid, valid), cycles=state.cycles + 1)
 
     def learn(self, hyper, state: MonteCarloState, decisions: jax.Array, tasks: Any):
-        optimizer, weight = optax.adam(self.learning_rate), state.valid.astype(jnp.float32)
+        optimizer, weight = optax.adam(self.settings.learning_rate), state.valid.astype(jnp.float32)
 
         def loss_fn(params):
             q = self.net.apply(params, state.inputs)
@@ -90,15 +100,17 @@ class MonteCarloQ:
             updates, opt_state = optimizer.update(grads, opt_state)
             return (optax.apply_updates(params, updates), opt_state), (loss, q_abs)
 
-        (params, opt_state), (losses, q_abs) = jax.lax.scan(step, (state.params, state.opt_state), None, length=EPOCHS)
+        (params, opt_state), (losses, q_abs) = jax.lax.scan(step, (state.params, state.opt_state), None,
+                                                           length=self.settings.epochs)
         return state.replace(params=params, opt_state=opt_state), losses.mean(), q_abs.max()
 
     def stored(self, state: MonteCarloState) -> jax.Array:
         return state.valid.sum(dtype=jnp.int32)
 
 
+@learner_settings(MonteCarloSettings)
 def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> MonteCarloQ:
-    """The factory `--learner examples.monte_carlo_q:make_learner` names: the config's network widths and
-    learning rate, for the approach's observation (`full_state` needs nothing different here)."""
-    return MonteCarloQ(env, QNetwork(config.hidden_sizes), num_features,
-                       config.episodes_per_cycle * config.train_steps, config.learning_rate)
+    """The factory `--learner examples.monte_carlo_q:make_learner` names; `config.learner` is its
+    MonteCarloSettings. For the approach's observation (`full_state` needs nothing different here)."""
+    return MonteCarloQ(env, QNetwork(config.learner.hidden_sizes), num_features,
+                       config.episodes_per_cycle * config.train_steps, config.learner)

@@ -4,7 +4,8 @@ from dataclasses import dataclass
 
 import jax.numpy as jnp
 
-from examples.monte_carlo_q import MonteCarloQ, make_learner
+from examples.monte_carlo_q import MonteCarloQ, MonteCarloSettings, make_learner
+from jaxbridge.core.learner_settings import learner_settings
 
 
 @dataclass(frozen=True)
@@ -25,9 +26,11 @@ class VectorLoss(MonteCarloQ):
         return state, jnp.full(3, loss), q_abs
 
 
+@learner_settings(MonteCarloSettings)
 def growing_state(*args):
     return GrowingState(*vars(make_learner(*args)).values())
 
 
+@learner_settings(MonteCarloSettings)
 def vector_loss(*args):
     return VectorLoss(*vars(make_learner(*args)).values())

@@ -97,8 +97,9 @@ def test_train_writes_the_run_directory(short_run):
     assert config["config_version"] == CONFIG_VERSION and config["num_seeds"] == 2 and config["approach"] == "ours"
     # --preset authors, resolved: the authors' values in every field they set (jaxbridge/core/presets.py)
     assert config["preset"] == "authors" and config["test_protocol"] == "authors"
-    assert (config["batch_size"], config["n_sample"], config["n_target_sample"], config["polyak_per"],
-            config["call_planner_bonus"], config["updates_per_cycle"]) == (64, 100, 1, "decision", 0.5, 10)
+    learner = config["learner"]  # the learner's settings, nested with its name
+    assert (learner["name"], learner["batch_size"], config["n_sample"], learner["n_target_sample"], learner["polyak_per"],
+            config["call_planner_bonus"], learner["updates_per_cycle"]) == ("dqn", 64, 100, 1, "decision", 0.5, 10)
     assert (run_dir / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in (run_dir / "checkpoints").iterdir() if p.name.isdigit()) == ["2", "3"]
     assert "done in" in proc.stdout

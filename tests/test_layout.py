@@ -73,15 +73,17 @@ def test_the_command_lines_call_only_the_public_api():
 
 # Where a string setting may be read as text: where it is resolved (a config's choices, presets, --sweep
 # values, CLI flags). Everywhere else a setting is a typed value (an enum member, a bool, None).
-RESOLUTION = {"jaxbridge.core.config", "jaxbridge.core.presets", "jaxbridge.core.grid", "jaxbridge.utils.cli"}
+RESOLUTION = {"jaxbridge.core.config", "jaxbridge.core.settings", "jaxbridge.core.learner_settings",
+              "jaxbridge.core.presets", "jaxbridge.core.grid", "jaxbridge.utils.cli"}
 
 
 def setting_names() -> set[str]:
     import dataclasses
 
     from jaxbridge.core.config import TrainConfig
+    from jaxbridge.core.learner_settings import BUILT_IN
     from jaxbridge.learn.approaches import Approach
-    names = {f.name for f in dataclasses.fields(TrainConfig)} | {f.name for f in dataclasses.fields(Approach)}
+    names = {f.name for cls in (TrainConfig, Approach, *BUILT_IN.values()) for f in dataclasses.fields(cls)}
     return (names - {"name", "label", "description"}) | {"request"}  # request: --devices' value
 
 

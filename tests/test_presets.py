@@ -46,7 +46,9 @@ def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_gua
     from jaxbridge.learn import online
 
     assert all(TrainConfig.for_env(env).loop_guard for env in ENVS)
-    old_run = {k: v for k, v in TrainConfig().to_dict().items() if k != "loop_guard"}
+    nested = TrainConfig().to_dict()  # a version-6 config was flat, without the learner's name
+    old_run = {**{k: v for k, v in nested.items() if k not in ("loop_guard", "learner")},
+               **{k: v for k, v in nested["learner"].items() if k != "name"}}
     assert not TrainConfig.from_dict({**old_run, "config_version": 6}).loop_guard
     seen = []
 

@@ -12,7 +12,7 @@ function. train.py and eval.py are these calls behind flags.
 
 docs/API.md shows each call with what it returns. Bad input raises InputError (a ValueError) in one line.
 """
-from jaxbridge.api.config import make_config
+from jaxbridge.api.config import make_config, settings_help
 from jaxbridge.api.devices import local_devices
 from jaxbridge.api.envs import env_names, load_env, make_env, tasks
 from jaxbridge.api.policies import Bridges, Drawn, Episodes, HandMade, Policy, hand_made, load, side_by_side
@@ -37,5 +37,5 @@ __all__ = ["ALL_APPROACHES", "APPROACHES", "Attention", "Bridges", "Drawn", "Env
            "Interrupted", "LOW_LEVEL", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "Policy", "SWEEP_TASKS",
            "TrainConfig", "TrainOutput", "Training", "WriteError", "default_approaches", "env_names", "hand_made",
            "load", "load_env", "local_devices", "make_config", "make_env", "make_train", "prepare", "prepare_resume",
-           "release_locks",            "resume", "seed_keys", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",
+           "release_locks",            "resume", "seed_keys", "settings_help", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",
            "train"]

@@ -2,26 +2,26 @@
 from __future__ import annotations
 
 import dataclasses
+import textwrap
 from typing import Sequence
 
 from jaxbridge.api.envs import EnvLike, env_name, load_env, seed_list
+from jaxbridge.core import grid
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import preset_values
 from jaxbridge.utils.errors import InputError, refusing
 
 
 def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = None, cycles: int | None = None,
-                **overrides) -> TrainConfig:
+                settings: Sequence[str] | None = None, **overrides) -> TrainConfig:
     """The TrainConfig a run of `env` trains with: TrainConfig's defaults, then its preset's values for the
     env (`preset="authors"` for the authors', default jaxbridge's), then `seeds` (a count from 0, or
-    consecutive seeds), `cycles` and any field as a keyword; None means "not given". Checked as train.py
+    consecutive seeds), `cycles` and any field (the learner's too: `batch_size=64`) as a keyword; None means
+    "not given". Checked as train.py
     checks it (InputError in one line: an unknown env, field or learner, a value out of range, a quirk or
     test protocol the env lacks, episodes that overflow the replay buffer, a seed block above the seeds;
     a learner of your own is checked against the learner contract when a training is prepared)."""
     given = {field: value for field, value in overrides.items() if value is not None}
-    unknown = sorted(set(given) - {f.name for f in dataclasses.fields(TrainConfig)})
-    if unknown:
-        raise InputError(f"unknown TrainConfig field {', '.join(unknown)} (help(jaxbridge.TrainConfig) lists them)")
     if seeds is not None:
         listed = seed_list(seeds)
         if listed != list(range(listed[0], listed[0] + len(listed))):
@@ -31,11 +31,43 @@ def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = 
         given["cycles"] = cycles
     env = TrainConfig.env if env is None else env
     env_cls = load_env(env)
-    with refusing():  # a value out of its range, e.g. a negative bonus
-        config = TrainConfig(env=env_name(env), **{**preset_values(given.pop("preset", TrainConfig.preset), env_cls),
-                                                   **given})
+    with refusing():  # an unknown setting or learner, a value out of its range (e.g. a negative bonus)
+        config = TrainConfig.over_preset(preset_values(given.pop("preset", TrainConfig.preset), env_cls),
+                                         env=env_name(env), **given)
+    with refusing("set"):
+        config = dataclasses.replace(config, **setting_values(settings or [], config))
     _check_fits_env(config, env_cls)
     return config
+
+
+def setting_values(texts: Sequence[str], config: TrainConfig) -> dict:
+    """{name: value} of `NAME=VALUE` texts, each value read as the setting of `config` (or of its learner)
+    it names is typed; ValueError in one line for a malformed text or an unknown name."""
+    values = {}
+    for text in texts:
+        name, sep, value = text.partition("=")
+        if not sep:
+            raise ValueError(f"{text!r}: expected NAME=VALUE")
+        values[name.strip().replace("-", "_")] = grid.parse_value(name.strip().replace("-", "_"), value.strip(), config)
+    return values
+
+
+def settings_help(learner: str | None = None, preset: str | None = None) -> str:
+    """What train.py --help lists under its flags: the settings of `learner` (default: the preset's learner,
+    else double DQN), each with its default and its docstring ("[leaf]": a sweep over it shares one
+    compiled program), then the names of TrainConfig's, which `--set` takes too."""
+    from jaxbridge.core import settings as declared
+    from jaxbridge.core.learner_settings import settings_class
+    from jaxbridge.core.presets import preset_learner
+
+    name = learner or preset_learner(preset) or TrainConfig.learner.name
+    with refusing("learner"):
+        cls = settings_class(name)
+    return (f"settings of learner {name} (--set NAME=VALUE; --sweep NAME=V1,V2):\n"
+            + declared.described(cls, skip=("name",))
+            + "\n\n" + textwrap.fill("settings of the run (--set NAME=VALUE, or their flags above; "
+                                     "help(jaxbridge.TrainConfig) explains each): "
+                                     + ", ".join(n for n in declared.fields_of(TrainConfig) if n != "learner"), 110))
 
 
 def _check_fits_env(config: TrainConfig, env_cls) -> None:
@@ -57,4 +89,4 @@ def _check_learner(config: TrainConfig, env_cls) -> None:
     contract is checked on the training's own setups (api/training.prepare)."""
     from jaxbridge.learn.learners import learner_factory
     with refusing("learner"):
-        learner_factory(config.learner)
+        learner_factory(config.learner.name)

@@ -162,7 +162,7 @@ def prepare(env: EnvLike | None = None, approaches: str | Sequence[str] | None =
     config = make_config(env, seeds, cycles, **overrides)
     env_cls = load_env(config.env)
     names = default_approaches(env_cls) if approaches is None else _approach_list(approaches)
-    hyper_grid = _sweep_grid(sweep)
+    hyper_grid = _sweep_grid(sweep, config)
     with _refusing_setups(config):
         _check_memory(config, env_cls, names, hyper_grid, workers, max_memory)
     _check_reachable(config, env_cls)
@@ -259,7 +259,7 @@ def _refusing_setups(config: TrainConfig):
     from jaxbridge.learn.learner import LearnerContractError
     from jaxbridge.learn.learners import registered
 
-    return refusing("approaches" if config.learner in registered() else "learner", (ValueError, LearnerContractError))
+    return refusing("approaches" if config.learner.name in registered() else "learner", (ValueError, LearnerContractError))
 
 
 def _plan(config: TrainConfig, names: list[str], hyper_grid: dict[str, tuple], env_cls):
@@ -272,19 +272,19 @@ def _plan(config: TrainConfig, names: list[str], hyper_grid: dict[str, tuple], e
 
     with _refusing_setups(config):
         experiment = plan(config, names, hyper_grid, env_cls)
-        for program in experiment.programs if config.learner not in registered() else []:
+        for program in experiment.programs if config.learner.name not in registered() else []:
             if program.setup.approach.bridge is BridgeKind.Q:
                 check_learner(program.setup.learner, program.setup.config)
     return experiment
 
 
-def _sweep_grid(sweep: Mapping[str, Sequence] | Sequence[str] | None) -> dict[str, tuple]:
+def _sweep_grid(sweep: Mapping[str, Sequence] | Sequence[str] | None, config: TrainConfig) -> dict[str, tuple]:
     """The hyperparameter grid ({} without one) of {field: values} or train.py's --sweep texts, checked
-    as train.py checks them."""
+    as train.py checks them (a field of `config` or of its learner, by name)."""
     texts = list(sweep or []) if not isinstance(sweep, Mapping) else [
         f"{key}={','.join(_sweep_text(v) for v in values)}" for key, values in sweep.items()]
     with refusing():
-        return grid.parse_sweeps(texts)
+        return grid.parse_sweeps(texts, config)
 
 
 def _sweep_text(value) -> str:

@@ -1,73 +1,69 @@
 """Hyperparameter grids: `train.py --sweep key=v1,v2 --sweep key2=...` as the settings of one experiment.
 
-A setting is a set of config overrides (one value per swept key); the grid is their cartesian product,
-in the order the keys and values were given. Settings that differ only in numeric hyperparameters
-(config.LEAF_FIELDS) share one compiled program; any other key (n_sample, widths, updates per cycle,
-...) makes programs of its own (`program_groups`).
+A setting is a set of config overrides (one value per swept key: a TrainConfig field or one of its
+learner's, by name); the grid is their cartesian product, in the order the keys and values were given.
+Settings that differ only in leaf hyperparameters (`setting(..., leaf=True)`, core/settings.py) share one
+compiled program; any other key (n_sample, widths, updates per cycle, ...) makes programs of its own
+(`program_groups`).
 """
 from __future__ import annotations
 
 import dataclasses
 import itertools
-import typing
 
-from jaxbridge.core.config import LEAF_FIELDS, TrainConfig
-
-# What an experiment is rather than how it learns: not sweepable (use separate experiments).
-NOT_SWEPT = ("env", "approach", "preset", "env_quirks", "test_protocol", "num_seeds", "first_seed", "cycles",
-             "seed_block", "checkpoint_every")
-FIELDS = {f.name: f for f in dataclasses.fields(TrainConfig)}
-SWEEPABLE = tuple(name for name in FIELDS if name not in NOT_SWEPT)
+from jaxbridge.core import settings as declared
+from jaxbridge.core.config import TrainConfig
 
 
-def parse_value(key: str, text: str):
-    """`text` as a value of TrainConfig field `key` (booleans: true/false/1/0; hidden_sizes: 64x64;
-    env_quirks: names joined by + or none); ValueError (one line) if it is not one."""
-    kind = typing.get_type_hints(TrainConfig)[key]
-    try:
-        if kind is bool:
-            if text.lower() not in ("true", "false", "1", "0"):
-                raise ValueError
-            return text.lower() in ("true", "1")
-        if kind is int:
-            return int(text)
-        if kind is float:
-            return float(text)
-        if key == "hidden_sizes":  # e.g. 64x64
-            return tuple(int(w) for w in text.split("x"))
-        if key == "env_quirks":  # e.g. raw_offsets, or a+b (a comma would start the next value of a sweep)
-            return () if text == "none" else tuple(text.split("+"))
-        return text
-    except ValueError:
-        expected = {"hidden_sizes": "widths like 64x64", bool: "true or false", int: "an integer",
-                    float: "a number"}.get(key if key == "hidden_sizes" else kind, "a value")
-        raise ValueError(f"{key}: expected {expected}, got {text!r}") from None
+def owner(config: TrainConfig, key: str) -> type | None:
+    """The settings class that declares `key` for `config`: TrainConfig or its learner's; None if neither."""
+    for cls in (TrainConfig, type(config.learner)):
+        if key in declared.fields_of(cls) and key != "name":
+            return cls
+    return None
 
 
-def parse_sweeps(texts: list[str]) -> dict[str, tuple]:
-    """{key: values} from `key=v1,v2` texts; ValueError (one line) for an unknown or unsweepable key, a
-    value of the wrong type or out of range, a repeated key or value."""
-    grid: dict[str, tuple] = {}
+def sweepable(config: TrainConfig) -> list[str]:
+    return [name for cls in (TrainConfig, type(config.learner)) for name in declared.fields_of(cls)
+            if name != "name" and declared.is_swept(cls, name)]
+
+
+def parse_value(key: str, text: str, config: TrainConfig | None = None):
+    """`text` as a value of setting `key` of `config` (default: TrainConfig's defaults), as
+    core/settings.parse_value reads it; ValueError (one line) if it is not one."""
+    config = config or TrainConfig()
+    cls = owner(config, key)
+    if cls is None:
+        raise ValueError(f"{key}: not a setting of TrainConfig or of learner {config.learner.name}")
+    return declared.parse_value(cls, key, text)
+
+
+def parse_sweeps(texts: list[str], config: TrainConfig | None = None) -> dict[str, tuple]:
+    """{key: values} from `key=v1,v2` texts, for a sweep from `config` (default: TrainConfig's defaults);
+    ValueError (one line) for an unknown or unsweepable key, a value of the wrong type or out of range, a
+    repeated key or value."""
+    config, grid = config or TrainConfig(), {}
     for text in texts:
         key, sep, values = text.partition("=")
         key = key.strip().replace("-", "_")
         if not sep or not values.strip():
             raise ValueError(f"--sweep {text!r}: expected key=value1,value2,...")
-        if key not in FIELDS:
-            raise ValueError(f"--sweep {key}: not a hyperparameter; sweepable: {', '.join(SWEEPABLE)}")
-        if key in NOT_SWEPT:
-            raise ValueError(f"--sweep {key}: sets the experiment, not a setting; sweepable: {', '.join(SWEEPABLE)}")
+        cls = owner(config, key)
+        if cls is None:
+            raise ValueError(f"--sweep {key}: not a hyperparameter; sweepable: {', '.join(sweepable(config))}")
+        if not declared.is_swept(cls, key):
+            raise ValueError(f"--sweep {key}: sets the experiment, not a setting; sweepable: {', '.join(sweepable(config))}")
         if key in grid:
             raise ValueError(f"--sweep {key} is given twice; list all its values in one --sweep")
         try:
-            parsed = tuple(parse_value(key, v.strip()) for v in values.split(","))
+            parsed = tuple(declared.parse_value(cls, key, v.strip()) for v in values.split(","))
         except ValueError as err:
             raise ValueError(f"--sweep {err}") from None
         if len(set(parsed)) < len(parsed):
             raise ValueError(f"--sweep {key}: a value is repeated in {values}")
         for value in parsed:
             try:
-                TrainConfig(**{key: value})
+                dataclasses.replace(config, **{key: value})
             except ValueError as err:
                 raise ValueError(f"--sweep {key}={value}: {err}") from None
         grid[key] = parsed
@@ -94,6 +90,5 @@ def program_groups(configs: list[TrainConfig]) -> list[list[int]]:
     compiled program (learn/online.Cycle), in first-appearance order."""
     groups: dict[tuple, list[int]] = {}
     for i, config in enumerate(configs):
-        static = tuple(getattr(config, name) for name in FIELDS if name not in LEAF_FIELDS)
-        groups.setdefault(static, []).append(i)
+        groups.setdefault(config.static_values(), []).append(i)
     return list(groups.values())

@@ -62,6 +62,11 @@ def preset_values(preset: str, env_cls) -> dict:
     return values
 
 
+def preset_learner(preset: str | None) -> str | None:
+    """The learner `preset` chooses, if it chooses one (pqn: PQN)."""
+    return {"authors": AUTHORS, "pqn": PQN}.get(preset, {}).get("learner")
+
+
 def default_test_protocol(env_cls) -> str:
     """The test protocol a plain `train.py --env E` trains on, and `eval.py --env E --bridge B` evaluates."""
     from jaxbridge.core.config import TrainConfig

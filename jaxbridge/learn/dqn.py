@@ -12,7 +12,8 @@ import optax
 from flax import struct
 
 from envs_jax.base import NoveltyEnv
-from jaxbridge.core.config import Normalise, ParamSamples, PolyakPer, TargetInit, TrainConfig
+from jaxbridge.core.config import ParamSamples, TrainConfig
+from jaxbridge.core.learner_settings import Normalise, PolyakPer, TargetInit
 from jaxbridge.core.observations import token_position, token_width
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper

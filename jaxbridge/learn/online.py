@@ -123,7 +123,7 @@ class Cycle:
     """One jitted cycle of every slot: `cycle(learners) -> (learners, metrics)`.
 
     A slot is a (setting, seed) pair, setting-major: `settings` are configs that differ from
-    `setup.config` only in their numeric hyperparameters (config.LEAF_FIELDS; default: that config
+    `setup.config` only in their leaf hyperparameters (declared `leaf=True`, core/settings.py; default: that config
     alone), and each passes its values to its seeds' slots as leaves (learn/hyper.py), so one program
     serves them all. Learner states and metrics carry the placed slot axis of `seeds` (padded to a multiple of
     the device count and sharded over the devices: `seeds.place(...)`, `seeds.unpad(...)`). Each device

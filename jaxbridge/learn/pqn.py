@@ -18,7 +18,8 @@ import optax
 from flax import struct
 
 from envs_jax.base import NoveltyEnv
-from jaxbridge.core.config import Normalise, ParamSamples, TrainConfig
+from jaxbridge.core.config import ParamSamples, TrainConfig
+from jaxbridge.core.learner_settings import Normalise, PQNSettings, learner_settings
 from jaxbridge.learn.dqn import q_network
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
@@ -73,13 +74,13 @@ class PQN:
         double DQN's targets). The max is over the next state's applicable candidates (n_target_sample
         parameter samples per skill), by the current network."""
         config, env = self.config, self.env
-        skills = candidate_skills(env, config.n_target_sample)
+        skills = candidate_skills(env, config.learner.n_target_sample)
         stratified = config.param_samples is ParamSamples.STRATIFIED
         keys = jax.random.split(key, valid.size).reshape(valid.shape)
         best_q = lambda f, g, k: best_candidate(env, self.net, params, f, g, skills, k, stratified=stratified)[1]
         next_q = jax.vmap(jax.vmap(best_q))(batch.next_features, batch.next_num_ground, keys)
         next_q = jnp.where(jnp.isfinite(next_q), next_q, 0.0)  # -inf: nothing applicable (only after `done`)
-        if config.clip_bootstrap:
+        if config.learner.clip_bootstrap:
             next_q = jnp.clip(next_q, 0.0, 1.0 + hyper.call_planner_bonus)
 
         late = (jnp.ones_like(batch.reward) if batch.steps is None
@@ -99,7 +100,7 @@ class PQN:
     def minibatch_step(self, hyper: Hyper, state: PQNState, batch: Transition, targets: jax.Array,
                        weight: jax.Array) -> tuple[PQNState, tuple[jax.Array, jax.Array, jax.Array]]:
         """One Adam step on the weighted squared error of a minibatch; none where it holds no decision."""
-        env, net, noise = self.env, self.net, self.config.feature_noise
+        env, net, noise = self.env, self.net, self.config.learner.feature_noise
         features = batch.features
         if noise > 0:  # as double DQN's (TrainConfig.feature_noise): a fresh draw per update
             features = features + noise * jax.random.normal(jax.random.fold_in(state.key, state.updates), features.shape)
@@ -122,12 +123,12 @@ class PQN:
         """Q(lambda) targets for the cycle's decisions, then `pqn_epochs` shuffled passes over them."""
         config = self.config
         key, k_targets, k_epochs = jax.random.split(state.key, 3)
-        if config.reset_optimizer:
+        if config.learner.reset_optimizer:
             state = state.replace(opt_state=self.optimizer.init(state.params))
         flat = lambda x: x.reshape((-1,) + x.shape[2:])
         targets = flat(self.lambda_returns(hyper, state.params, state.batch, state.valid, k_targets))
         batch, valid = jax.tree.map(flat, state.batch), flat(state.valid)
-        rows, parts = valid.shape[0], config.pqn_minibatches
+        rows, parts = valid.shape[0], config.learner.pqn_minibatches
         size = -(-rows // parts)
 
         def epoch(state, k):
@@ -140,18 +141,15 @@ class PQN:
             minibatches = (jax.tree.map(lambda x: x[picked], batch), targets[picked], weight)  # each [parts, size, ...]
             return jax.lax.scan(lambda state, part: self.minibatch_step(hyper, state, *part), state, minibatches)
 
-        state, (losses, q_abs, ran) = jax.lax.scan(epoch, state, jax.random.split(k_epochs, config.pqn_epochs))
+        state, (losses, q_abs, ran) = jax.lax.scan(epoch, state, jax.random.split(k_epochs, config.learner.pqn_epochs))
         ran = ran.astype(jnp.float32)
         loss = jnp.sum(losses * ran) / jnp.maximum(ran.sum(), 1.0)
         return state.replace(key=key), loss, jnp.max(q_abs * ran)
 
 
-UNSUPPORTED = {"normalise": lambda c: c.normalise is not Normalise.NONE, "fit_patience": lambda c: c.fit_patience > 0}
-
-
+@learner_settings(PQNSettings)
 def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> PQN:
     """The learner registry's factory: double DQN's network with LayerNorm; the same optimiser."""
-    refused = [name for name, used in UNSUPPORTED.items() if used(config)]
-    if refused:
-        raise ValueError(f"learner pqn does not support {', '.join(refused)} (set by the config or its preset)")
+    if config.learner.normalise is not Normalise.NONE:
+        raise ValueError("learner pqn does not support normalise (set by the config or its preset)")
     return PQN(env, config, replace(q_network(config, env), layer_norm=True), clipped_adam(), num_features)

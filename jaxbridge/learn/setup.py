@@ -92,7 +92,7 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds]).with_quirks(config.env_quirks)
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
-    make_learner = learner_factory(config.learner)
+    make_learner = learner_factory(config.learner.name)
     learner = make_learner(config, train_env, approach.observation_size(train_env), approach.controls.observation.whole_state)
     return Setup(config, env_cls, approach, train_env, test_env, learner)
 

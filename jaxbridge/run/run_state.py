@@ -157,11 +157,22 @@ def check_checkpoint_belongs(config: TrainConfig, run_dir: Path) -> None:
     if (saved.env, saved.approach) != (config.env, config.approach):
         raise checkpoint.CheckpointError(f"checkpoint {where} was written by a {saved.env} run of {saved.approach}, but the run "
                               f"is {config.env} of {config.approach}; refusing to load it")
-    differ = [f"{f.name} {getattr(saved, f.name)} there, {getattr(config, f.name)} here"
-              for f in dataclasses.fields(config) if getattr(saved, f.name) != getattr(config, f.name)]
+    differ = _differences(saved, config)
     if differ:
         raise checkpoint.CheckpointError(f"checkpoint {where} was written with another config ({'; '.join(differ)}); "
                               f"refusing to load it")
+
+
+def _differences(saved, config, prefix: str = "") -> list[str]:
+    """Each setting that differs, as "name there, here" (a learner's as learner.name)."""
+    differ = []
+    for f in dataclasses.fields(config):
+        there, here = getattr(saved, f.name), getattr(config, f.name)
+        if there != here and type(there) is type(here) and dataclasses.is_dataclass(here):
+            differ += _differences(there, here, f"{prefix}{f.name}.")
+        elif there != here:
+            differ.append(f"{prefix}{f.name} {there} there, {here} here")
+    return differ
 
 
 def common_step(run_dirs: list[Path]) -> int:

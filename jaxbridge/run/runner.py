@@ -47,7 +47,7 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], hooks
                    resume: bool = False, fault_injection: Callable | None = None) -> list[dict]:
     """Run the cycles of every (config, run directory) in `settings` as one program (continuing each
     run's latest checkpoint with `resume`), writing each run's files and checkpoints into its directory.
-    The configs differ from `setup.config` only in their numeric hyperparameters (config.LEAF_FIELDS),
+    The configs differ from `setup.config` only in their leaf hyperparameters (core/settings.py),
     which the cycle takes as leaves (learn/online.Cycle): each run's numbers are those it gets alone.
     `hooks` (run/hooks.py): progress, stop, per-cycle callback, TensorBoard, the devices the slot axis
     is sharded over (the numbers do not depend on them; a run may resume, or widen, onto others).
