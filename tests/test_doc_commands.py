@@ -24,7 +24,7 @@ def printed_commands() -> dict[str, str]:
     found = {}
     for doc in DOCS:
         for block, span in CODE.findall(doc.read_text()):
-            for line in (block or span).splitlines():
+            for line in re.sub(r"\\\n\s*", " ", block or span).splitlines():  # a line continued by a backslash
                 match = COMMAND.match(re.split(r"\s+#", line)[0].strip())
                 if match:
                     found.setdefault(match.group(1), str(doc.relative_to(ROOT)))
