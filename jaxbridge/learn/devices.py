@@ -9,6 +9,7 @@ devices").
 """
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -107,6 +108,18 @@ def _key_data(x):
     return jax.random.key_data(x) if is_prng_key(x) else x
 
 
+# Whole pytrees in one compiled program each: leaf by leaf, every leaf's shape compiled its own op, a
+# fixed start-up cost of every run and evaluation.
+@functools.partial(jax.jit, static_argnums=1)
+def _repeat_last(tree: Any, extra: int) -> Any:
+    return jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)]), tree)
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _leading(tree: Any, n: int) -> Any:
+    return jax.tree.map(lambda x: x[:n], tree)
+
+
 @dataclass(frozen=True)
 class SeedMesh:
     """`num_seeds` seeds laid out over `devices`: seed i lives in slot i; slots num_seeds..padded-1
@@ -140,9 +153,7 @@ class SeedMesh:
     def pad(self, tree: Any) -> Any:
         """Leading axis num_seeds -> padded, by repeating the last seed."""
         extra = self.padded - self.num_seeds
-        if not extra:
-            return tree
-        return jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)]), tree)
+        return _repeat_last(tree, extra) if extra else tree
 
     @property
     def spans_processes(self) -> bool:
@@ -173,7 +184,7 @@ class SeedMesh:
                 host = np.asarray(multihost_utils.process_allgather(_key_data(x), tiled=True))[: self.num_seeds]
                 return jax.random.wrap_key_data(host, impl=jax.random.key_impl(x)) if is_prng_key(x) else host
             return jax.tree.map(gather, tree)
-        return jax.device_put(jax.tree.map(lambda x: x[: self.num_seeds], tree), jax.local_devices()[0])
+        return _leading(jax.device_put(tree, jax.local_devices()[0]), self.num_seeds)
 
     def real(self) -> jax.Array:
         """bool[padded], placed: which slots hold a real seed."""

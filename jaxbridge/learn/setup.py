@@ -63,7 +63,7 @@ class Setup:
         if self.approach.low_level:
             from jaxbridge.learn.low_level import init_policies  # brax: imported only when used
             return init_policies(self)
-        return jax.vmap(self.learner.init)(seed_keys(self.config))
+        return jax.jit(jax.vmap(self.learner.init))(seed_keys(self.config))  # one program, not op by op
 
     def greedy_policy(self, env: NoveltyEnv, states: Any, owner: np.ndarray) -> tuple[Bridge, Any, Controls]:
         """The approach's greedy bridge on `env`, its per-episode parameters (episode i acts with seed owner[i]'s
