@@ -12,6 +12,7 @@ from envs_jax import env_class, register
 from examples.locked_box import LockedBox
 from jaxbridge import EnvContractError, check_env
 import plugin_envs
+from run_helpers import cli_in_process
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -89,7 +90,7 @@ def test_a_plugin_env_trains_from_the_command_line_and_its_bridge_beats_the_rand
 
 
 def test_a_broken_plugin_env_is_refused_in_one_line_naming_the_method(tmp_path):
-    proc = train("--env", "tests.plugin_envs:ShortFeatures", "--out", str(tmp_path))
+    proc = cli_in_process("train.py", "--no-progress", "--env", "tests.plugin_envs:ShortFeatures", "--out", str(tmp_path))
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.strip().count("\n") == 0
     assert "ShortFeatures.features: expected float32[3], got float32[2]" in proc.stderr

@@ -141,7 +141,7 @@ def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
     tasks = jax.tree.map(lambda *xs: jnp.asarray(np.stack(xs)), *task_arrays)
     task = jax.tree.map(lambda x: x[0], tasks)
     state = _calls(f"{name}.reset", jax.jit(env.reset), task)
-    _same(f"{name}.reset", state, jax.jit(lambda t: env.reset(t))(task))
+    _traced_alike(f"{name}.reset", env.reset, task)
     vec = _shape(f"{name}.state_vector", _calls(f"{name}.state_vector", jax.eval_shape, env.state_vector, state),
                  jnp.float32)
     zero = jnp.zeros(env.action_dim, jnp.float32)
@@ -156,6 +156,7 @@ def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
         "abstract": (env.abstract, (env.num_atoms,), jnp.bool_),
         "goal_reached": (env.goal_reached, (), jnp.bool_),
         "state_vector": (env.state_vector, vec.shape, jnp.float32),
+        "step": (lambda s: env.state_vector(env.step(s, env.skill_action(s, one_call))), vec.shape, jnp.float32),
         "features": (lambda s: env.features(s, s), (env.num_features,), jnp.float32),
         "full_state": (env.full_state, (env.full_state_size,), jnp.float32),
         "skill_action": (lambda s: jax.vmap(env.skill_action, (None, 0))(s, calls), (env.num_skills, env.action_dim),
@@ -163,7 +164,6 @@ def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
         "skill_done": (lambda s: jax.vmap(env.skill_done, (None, None, 0))(s, env.step(s, zero), calls),
                        (env.num_skills,), jnp.bool_),
         "skill_initiable": (lambda s: env.skill_initiable(s, skill_ids, slots), (env.num_skills,), jnp.bool_),
-        "step": (lambda s: env.state_vector(env.step(s, env.skill_action(s, one_call))), vec.shape, jnp.float32),
     }
     batch_of_states = jax.eval_shape(jax.vmap(env.reset), tasks)
     for method, (fn, shape, dtype) in functions.items():  # shapes first: abstract traces, nothing compiled
@@ -171,12 +171,13 @@ def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
         _shape(where, _calls(where, jax.eval_shape, fn, state), dtype, shape)
         _shape(f"{where} under vmap", _calls(f"{where} under vmap", jax.eval_shape, jax.vmap(fn), batch_of_states),
                dtype, (len(task_arrays),) + shape)
-    # Then values, all functions in one program: two separate traces and a vmapped one must agree.
+    # Then each function traced twice to the same program, and values, all functions in one program: one
+    # state's and a vmapped batch's must agree.
+    for method, (fn, _, _) in functions.items():
+        _traced_alike(f"{name}.{method}", fn, state)
     every = lambda s: {method: fn(s) for method, (fn, _, _) in functions.items()}
-    first, second = jax.jit(every)(state), jax.jit(lambda s: every(s))(state)
-    batched = jax.jit(jax.vmap(every))(jax.vmap(env.reset)(tasks))
+    first, batched = jax.jit(every)(state), jax.jit(jax.vmap(every))(jax.vmap(env.reset)(tasks))
     for method in functions:
-        _same(f"{name}.{method}", first[method], second[method])
         _same(f"{name}.{method} under vmap", first[method], batched[method][0])
     _check_objects(env, jax.vmap(env.reset)(tasks))
 
@@ -229,13 +230,24 @@ def _shape(where: str, value: Any, dtype, shape: tuple | None = None) -> jax.Arr
     return value
 
 
+def _traced_alike(where: str, fn: Callable, *args) -> None:
+    """A second trace is the same program, constants included: the function depends on its inputs alone
+    (no hidden Python state), checked without compiling it twice."""
+    first, second = (jax.make_jaxpr(lambda *a: fn(*a))(*args) for _ in range(2))  # new functions: no cached trace
+    consts_equal = len(first.consts) == len(second.consts) and all(
+        np.array_equal(np.asarray(a), np.asarray(b)) for a, b in zip(first.consts, second.consts))
+    if str(first) != str(second) or not consts_equal:
+        raise EnvContractError(f"{where}: expected the same values from the same inputs (a second trace), "
+                               f"got different ones (hidden state or randomness?)")
+
+
 def _same(where: str, *values: Any) -> None:
-    """Equal values from equal inputs: no hidden state, no randomness without a key."""
+    """Equal values from equal inputs, one at a time and in a batch (jit, vmap)."""
     try:
         for other in values[1:]:
             chex.assert_trees_all_close(values[0], other, rtol=1e-5, atol=1e-5)
     except AssertionError:
-        raise EnvContractError(f"{where}: expected the same values from the same inputs (jit, vmap, a second call), "
+        raise EnvContractError(f"{where}: expected the same values from the same inputs (jit, vmap), "
                                f"got different ones (hidden state or randomness?)") from None
 
 
