@@ -16,6 +16,40 @@ def train(*args, timeout=600) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "train.py", *args], cwd=ROOT, capture_output=True, text=True, timeout=timeout)
 
 
+def cli_in_process(script: str, *args) -> subprocess.CompletedProcess:
+    """`python script args` run in this process, through its `run_main` as `__main__` runs it: the exit
+    code and what it printed, without a new interpreter's start-up (seconds each). For input refused
+    before training starts; a training's threads, locks and signals belong in a child process."""
+    import contextlib
+    import importlib.util
+    import io
+    import signal
+
+    import jaxbridge
+    from jaxbridge.utils.cli import run_main
+
+    if script not in _MAINS:
+        spec = importlib.util.spec_from_file_location(f"cli_{Path(script).stem}", ROOT / script)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        _MAINS[script] = module.main
+    out, err, handler, argv = io.StringIO(), io.StringIO(), signal.getsignal(signal.SIGINT), sys.argv
+    with contextlib.chdir(ROOT), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            sys.argv = [script, *args]  # argparse names the program by it
+            code = run_main(_MAINS[script], list(args))
+        except SystemExit as exit_:  # argparse's refusals
+            code = exit_.code
+        finally:
+            sys.argv = argv
+            signal.signal(signal.SIGINT, handler)  # train.py's Ctrl-C handler, installed before its checks
+            jaxbridge.release_locks()
+    return subprocess.CompletedProcess([script, *args], code, out.getvalue(), err.getvalue())
+
+
+_MAINS: dict = {}
+
+
 def one_line_error(proc, code: int, *words: str) -> None:
     err = proc.stderr.strip()
     assert proc.returncode == code, proc.stderr

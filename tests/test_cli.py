@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from jaxbridge.core.config import CONFIG_VERSION
-from run_helpers import read_scalars
+from run_helpers import cli_in_process, read_scalars
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -180,7 +180,7 @@ def test_eval_rejects_bad_combinations_in_one_line(short_run, eval_main, capsys,
 
 def test_an_existing_run_is_not_overwritten(short_run):
     run_dir = short_run[0]
-    proc = run("train.py", "--cycles", "1", "--out", str(run_dir.parent), "--name", "tiny", "--no-progress")
+    proc = cli_in_process("train.py", "--cycles", "1", "--out", str(run_dir.parent), "--name", "tiny", "--no-progress")
     assert proc.returncode == 2 and "already exists" in proc.stderr and "Traceback" not in proc.stderr
 
 
@@ -204,7 +204,7 @@ def test_an_existing_run_is_not_overwritten(short_run):
     (["eval.py", "--num-seeds", "x"], "positive integer"),
 ])
 def test_bad_input_is_one_clear_line_and_exit_code_2(args, message):
-    proc = run(*args)
+    proc = cli_in_process(*args)
     assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
 
 

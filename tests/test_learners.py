@@ -9,7 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from run_helpers import one_line_error, train as train_cli, trained_whole_and_resumed
+from run_helpers import cli_in_process, one_line_error, train as train_cli, trained_whole_and_resumed
 
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.hyper import Hyper
@@ -44,8 +44,8 @@ def test_a_broken_learner_is_refused_naming_the_method_and_what_it_expected(tmp_
     with pytest.raises(ValueError, match="unknown learner 'nope'; choose from dqn, pqn"):
         make_setup(replace(config, learner="nope"))
     # train.py checks a learner of your own before anything is written
-    proc = train_cli("--learner", "tests.plugin_learners:growing_state", "--approaches", "ours", "--num-seeds", "1",
-                     "--out", str(tmp_path))
+    proc = cli_in_process("train.py", "--learner", "tests.plugin_learners:growing_state", "--approaches", "ours",
+                          "--num-seeds", "1", "--out", str(tmp_path))
     one_line_error(proc, 2, "--learner: GrowingState.observe: expected a state of init's shapes")
     assert not any(tmp_path.iterdir())
 
@@ -109,6 +109,6 @@ def test_the_example_learners_own_settings_sweep_and_are_set_from_the_command_li
     for epochs in (2, 7):
         saved = json.loads((tmp_path / "locked_box" / f"ours@epochs={epochs}" / "config.json").read_text())["learner"]
         assert (saved["name"], saved["epochs"], saved["memory"]) == (learner, epochs, 3)
-    refused = train_cli("--env", "examples.locked_box:LockedBox", "--learner", learner, "--set", "memory=0",
-                        "--out", str(tmp_path / "refused"))
+    refused = cli_in_process("train.py", "--env", "examples.locked_box:LockedBox", "--learner", learner, "--set", "memory=0",
+                             "--out", str(tmp_path / "refused"))
     assert refused.returncode == 2 and "memory must be at least 1" in refused.stderr

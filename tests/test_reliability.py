@@ -21,7 +21,7 @@ from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import rundir
 from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.runner import NumericalFault, train
-from run_helpers import start_held, wait_for
+from run_helpers import cli_in_process, start_held, wait_for
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ["--num-seeds", "2", "--cycles", "6", "--updates-per-cycle", "50", "--checkpoint-every", "1", "--no-progress",
@@ -78,7 +78,7 @@ def test_a_damaged_checkpoint_is_refused(uninterrupted, tmp_path, damage):
         data = data[: len(data) // 2]
     target.write_bytes(bytes(data))
     for args in (["eval.py", str(run_dir)], ["train.py", "--resume", str(run_dir)]):
-        proc = cli(*args)
+        proc = cli_in_process(*args)
         assert proc.returncode == 2 and "corrupted" in proc.stderr and "Traceback" not in proc.stderr
 
 
@@ -185,7 +185,7 @@ def test_a_checkpoint_of_another_config_version_is_refused(uninterrupted, tmp_pa
     config = json.loads((run_dir / "config.json").read_text())
     config["config_version"] = 0
     (run_dir / "config.json").write_text(json.dumps(config))
-    proc = cli("train.py", "--resume", str(run_dir))
+    proc = cli_in_process("train.py", "--resume", str(run_dir))
     assert proc.returncode == 2 and "config version 0 is not supported" in proc.stderr
 
 
@@ -202,7 +202,7 @@ def test_a_checkpoint_of_another_env_or_config_is_refused(uninterrupted, tmp_pat
     config[field] = value
     (run_dir / "config.json").write_text(json.dumps(config))
     for command in (["train.py", "--resume"], ["eval.py"]):
-        proc = cli(*command, str(run_dir))
+        proc = cli_in_process(*command, str(run_dir))
         assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
 
 
@@ -214,7 +214,7 @@ def test_a_checkpoint_of_another_env_or_config_is_refused(uninterrupted, tmp_pat
     (["eval.py", "--help-me"], "unrecognized arguments"),
 ])
 def test_more_bad_input(args, message):
-    proc = cli(*args)
+    proc = cli_in_process(*args)
     assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
 
 

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from run_helpers import QUICK, ROOT, one_line_error, snapshot, start_held, train, wait_for
+from run_helpers import QUICK, cli_in_process, one_line_error, snapshot, start_held, train, wait_for
 
 from jaxbridge.run import rundir
 
@@ -33,9 +33,9 @@ def test_overwrite_replaces_only_runs_and_names_stay_inside_out(finished, tmp_pa
     (precious / "thesis.txt").write_text("years of work")
     (tmp_path / "beside.txt").write_text("untouched")
     before = snapshot(tmp_path)
-    one_line_error(train(*QUICK, "--cycles", "1", "--out", str(tmp_path), "--name", "precious", "--overwrite"), 2,
+    one_line_error(cli_in_process("train.py", *QUICK, "--cycles", "1", "--out", str(tmp_path), "--name", "precious", "--overwrite"), 2,
                    "is not a run directory of train.py", "left untouched")
-    one_line_error(train(*QUICK, "--cycles", "1", "--out", str(tmp_path / "runs"), "--name", "..", "--overwrite"),
+    one_line_error(cli_in_process("train.py", *QUICK, "--cycles", "1", "--out", str(tmp_path / "runs"), "--name", "..", "--overwrite"),
                    2, "--name must be a plain directory name")
     for name in (".", "a/b", "", "/abs"):  # the same check, in this process
         with pytest.raises(rundir.RunDirError, match="--name must be a plain directory name"):
@@ -83,7 +83,7 @@ def test_resume_of_an_experiment_whose_checkpoints_are_gone_is_refused(finished,
     copy_of(finished, tmp_path, "lost")
     shutil.rmtree(tmp_path / "lost" / "pure_planning" / "checkpoints")
     before = snapshot(tmp_path)
-    one_line_error(train("--resume", str(tmp_path / "lost"), "--no-progress"), 2,
+    one_line_error(cli_in_process("train.py", "--resume", str(tmp_path / "lost"), "--no-progress"), 2,
                    "has results but no complete checkpoint to resume from", "--overwrite")
     assert snapshot(tmp_path) == before
 
@@ -96,31 +96,29 @@ def test_a_damaged_manifest_is_a_corrupted_checkpoint(finished, tmp_path, manife
     copy_of(finished, tmp_path, "m")
     (tmp_path / "m" / "pure_planning" / "checkpoints" / "2.sha256.json").write_text(manifest)
     args = ["--resume", str(tmp_path / "m"), "--no-progress"] if tool == "train.py" else [str(tmp_path / "m"), "--approach", "pure_planning"]
-    proc = subprocess.run([sys.executable, tool, *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
-    one_line_error(proc, 2, *words)
+    one_line_error(cli_in_process(tool, *args), 2, *words)
 
 
 def test_a_run_too_big_for_memory_is_refused_with_its_estimate(tmp_path):
-    one_line_error(train("--num-seeds", "100000", "--out", str(tmp_path)), 2, "this run needs about",
+    one_line_error(cli_in_process("train.py", "--num-seeds", "100000", "--out", str(tmp_path)), 2, "this run needs about",
                    "x 100000 seeds), more than the", "GiB available; lower --num-seeds (about")
-    one_line_error(train(*QUICK, "--max-memory", "0.5", "--out", str(tmp_path)), 2, "GiB allowed by --max-memory")
+    one_line_error(cli_in_process("train.py", *QUICK, "--max-memory", "0.5", "--out", str(tmp_path)), 2,
+                   "GiB allowed by --max-memory")
     assert not any(tmp_path.iterdir())  # refused before anything was written
 
 
 def test_an_evaluation_too_big_for_memory_is_refused_with_its_estimate(finished):
     """Light Switch Door's plan tables grow with cells squared: 100000 cells is ~37 GiB per task, refused
     from the env's plan_bound before anything is grounded; Coffee has no bound, so its first task is."""
-    evaluate = lambda *args: subprocess.run([sys.executable, "eval.py", str(finished), "--approach", "pure_planning", *args], cwd=ROOT,
-                                            capture_output=True, text=True, timeout=600)
+    evaluate = lambda *args: cli_in_process("eval.py", str(finished), "--approach", "pure_planning", *args)
     one_line_error(evaluate("--task-size", "cells=100000,doors=1"), 2, "evaluating these 10 tasks needs about",
                    "plan tables of 200000 states x 400000 operators), more than the", "GiB available; lower --task-size")
     one_line_error(evaluate("--task-size", "cells=40,doors=2", "--max-memory", "0.5"), 2, "allowed by --max-memory")
-    proc = subprocess.run([sys.executable, "eval.py", "--env", "coffee", "--num-seeds", "3", "--max-memory", "0.5"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=600)
-    one_line_error(proc, 2, "evaluating these 30 tasks needs about")
+    one_line_error(cli_in_process("eval.py", "--env", "coffee", "--num-seeds", "3", "--max-memory", "0.5"), 2,
+                   "evaluating these 30 tasks needs about")
 
 
 def test_bad_flags_are_one_line_with_a_pointer_to_help():
-    one_line_error(train("--num-seeds", "0"), 2, "train.py: error: argument --num-seeds: expected a positive integer",
+    one_line_error(cli_in_process("train.py", "--num-seeds", "0"), 2, "train.py: error: argument --num-seeds: expected a positive integer",
                    "(see train.py --help)")
-    one_line_error(train("--no-such-flag"), 2, "train.py: error: unrecognized arguments: --no-such-flag")
+    one_line_error(cli_in_process("train.py", "--no-such-flag"), 2, "train.py: error: unrecognized arguments: --no-such-flag")

@@ -18,6 +18,7 @@ from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import checkpoint
 from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.runner import train
+from run_helpers import cli_in_process
 
 ROOT = Path(__file__).resolve().parents[1]
 SWEEP = ["--sweep", "learning_rate=1e-3,3e-4", "--sweep", "epsilon_decay=3.8e-5,1e-3"]
@@ -68,7 +69,7 @@ def test_invalid_sweep_values_are_refused(text, message):
 
 
 def test_train_refuses_a_bad_sweep_in_one_line():
-    proc = cli("--sweep", "gamma=0.5,2", "--cycles", "1")
+    proc = cli_in_process("train.py", "--sweep", "gamma=0.5,2", "--cycles", "1")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.strip().splitlines() == ["error: --sweep gamma=2.0: gamma must be at least 0 and at most 1, got 2.0"]
 
