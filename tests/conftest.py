@@ -30,11 +30,12 @@ def eval_main():
 # The costliest test files first, by their seconds on a fresh clone (`python -m pytest --durations=0`):
 # with `--dist loadfile` each file runs whole on one worker, in this order (`--no-loadscope-reorder`),
 # so a long file started last cannot leave the other worker idle at the end.
-COSTLIEST_FIRST = ("test_claims.py", "test_low_level.py", "test_learning.py", "test_cli.py", "test_scale_out.py",
-                   "test_reliability.py", "test_safety.py", "test_presets.py", "test_api.py", "test_devices.py",
-                   "test_doorknobs.py", "test_env_contract.py", "test_quickstart.py", "test_learners.py", "test_object_selection.py", "test_distractors.py", "test_coffee.py", "test_multi_novelty.py", "test_plan_repair.py",
-                   "test_env_plugins.py", "test_faults.py", "test_render.py", "test_meta_policy.py", "test_approaches.py", "test_sweep.py",
-                   "test_fix_length.py", "test_optim.py", "test_light_switch_door.py")
+COSTLIEST_FIRST = ("test_claims.py", "test_learners.py", "test_learning.py", "test_doorknobs.py", "test_object_selection.py",
+                   "test_low_level.py", "test_cli.py", "test_reliability.py", "test_scale_out.py", "test_safety.py",
+                   "test_env_contract.py", "test_api.py", "test_presets.py", "test_multi_novelty.py", "test_quickstart.py",
+                   "test_render.py", "test_plan_repair.py", "test_coffee.py", "test_devices.py", "test_faults.py",
+                   "test_meta_policy.py", "test_approaches.py", "test_sweep.py", "test_optim.py", "test_fix_length.py",
+                   "test_settings.py", "test_env_plugins.py", "test_light_switch_door.py", "test_distractors.py")
 
 
 def pytest_collection_modifyitems(items):

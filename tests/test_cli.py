@@ -107,12 +107,12 @@ def test_train_writes_the_run_directory(short_run):
 
 def test_eval_loads_the_checkpoint(short_run):
     run_dir = short_run[0]  # the experiment directory: eval.py picks its "ours" run
-    proc = run("eval.py", str(run_dir), "--num-tasks", "3")
+    proc = cli_in_process("eval.py", str(run_dir), "--num-tasks", "3")
     assert proc.returncode == 0, proc.stderr
     assert "checkpoint of cycle 3" in proc.stdout and "20 cells, 3 doors" not in proc.stdout
     lines = [line for line in proc.stdout.splitlines() if line.strip().startswith(("0 ", "1 "))]
     assert len(lines) == 2
-    bigger = run("eval.py", str(run_dir), "--task-size", "cells=25,doors=5", "--num-tasks", "2")
+    bigger = cli_in_process("eval.py", str(run_dir), "--task-size", "cells=25,doors=5", "--num-tasks", "2")
     assert bigger.returncode == 0, bigger.stderr
     assert "25 cells, 5 doors" in bigger.stdout
 
@@ -209,7 +209,7 @@ def test_bad_input_is_one_clear_line_and_exit_code_2(args, message):
 
 
 def test_eval_hand_made_bridges():
-    proc = run("eval.py", "--bridge", "oracle", "--num-seeds", "2")
+    proc = cli_in_process("eval.py", "--bridge", "oracle", "--num-seeds", "2")
     assert proc.returncode == 0, proc.stderr
     last = proc.stdout.strip().splitlines()[-1].split()
     assert last[0] == "all" and float(last[2]) == 1.0  # every task solved
@@ -218,8 +218,8 @@ def test_eval_hand_made_bridges():
 def test_eval_hand_made_bridges_meet_the_test_tasks_train_py_would():
     """Coffee trains on the authors' 4-cup tasks by default; eval.py --bridge evaluates those too, and
     names the protocol only when it is another one."""
-    default = run("eval.py", "--env", "coffee", "--bridge", "oracle", "--num-seeds", "1")
-    variant = run("eval.py", "--env", "coffee", "--bridge", "oracle", "--num-seeds", "1", "--test-protocol", "jaxbridge")
+    default = cli_in_process("eval.py", "--env", "coffee", "--bridge", "oracle", "--num-seeds", "1")
+    variant = cli_in_process("eval.py", "--env", "coffee", "--bridge", "oracle", "--num-seeds", "1", "--test-protocol", "jaxbridge")
     assert default.returncode == variant.returncode == 0, default.stderr + variant.stderr
     sizes = lambda proc: {" ".join(line.split()[1:3]) for line in proc.stdout.splitlines() if line.split()[:1] == ["0"]}
     assert sizes(default) == {"4 cups"} and "protocol" not in default.stdout.splitlines()[0]

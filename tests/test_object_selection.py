@@ -11,6 +11,7 @@ from jaxbridge.core.observations import object_tokens, token_slots, token_width
 from jaxbridge.learn.dqn import q_network
 from jaxbridge.learn.object_q import attention
 from jaxbridge.learn.q_bridge import encode
+from run_helpers import cli_in_process, train
 
 ENV = env_class("light_switch_door")
 
@@ -88,21 +89,15 @@ def test_the_approach_refuses_what_its_network_does_not_have():
 
 def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_looks_at(tmp_path):
     """LSD, 2 seeds x 2 cycles: the run's files, its checkpoint evaluated, and eval.py --attention's line."""
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[1]
-    run = lambda *args: subprocess.run([sys.executable, *args], cwd=root, capture_output=True, text=True, timeout=600)
-    trained = run("train.py", "--approaches", "ours_learned_selection", "--num-seeds", "2", "--cycles", "2",
-                  "--out", str(tmp_path), "--no-progress")
+    trained = train("--approaches", "ours_learned_selection", "--num-seeds", "2", "--cycles", "2",
+                    "--out", str(tmp_path), "--no-progress")
     assert trained.returncode == 0, trained.stderr
     experiment = tmp_path / "light_switch_door"
-    looked = run("eval.py", str(experiment), "--approach", "ours_learned_selection", "--attention")
+    looked = cli_in_process("eval.py", str(experiment), "--approach", "ours_learned_selection", "--attention")
     assert looked.returncode == 0, looked.stderr
     line = looked.stdout.splitlines()[-1]
     assert line.startswith("attention on the fix's object, per seed: 0 ") and "; all " in line
-    refused = run("eval.py", str(experiment / "ours_learned_selection"), str(experiment / "ours_learned_selection"),
+    refused = cli_in_process("eval.py", str(experiment / "ours_learned_selection"), str(experiment / "ours_learned_selection"),
                   "--attention")
     assert refused.returncode == 2 and "--attention reports on one RUN's evaluation" in refused.stderr
     # --render shades what it attends to: the re-run episode carries, at each bridge decision, weights over
