@@ -59,8 +59,8 @@ def test_a_locked_run_directory_is_refused_to_a_second_process(tmp_path):
         wait_for(signals / "held", first)
         holder = json.loads((run / ".lock").read_text())
         assert holder["pid"] == first.pid
-        for proc in (train(*QUICK, "--cycles", "1", "--out", str(tmp_path), "--name", "c", "--overwrite"),
-                     train("--resume", str(run), "--no-progress")):
+        for proc in (cli_in_process("train.py", *QUICK, "--cycles", "1", "--out", str(tmp_path), "--name", "c", "--overwrite"),
+                     cli_in_process("train.py", "--resume", str(run), "--no-progress")):
             one_line_error(proc, 2, f"is in use by process {first.pid}", "wait for it to finish")
         (signals / "release").touch()
         out, err = first.communicate(timeout=300)
