@@ -88,6 +88,10 @@ class QSettings(LearnerSettings):
     (a fresh draw per update; the TD targets stay those of the clean features): the Q-network is fitted
     to a neighbourhood of every stored state, not to the point, so it varies less with features that
     differ between the training task and the test tasks. 0: none (the paper)."""
+    count_bonus: float = setting(0.0, low=0)
+    """Exploration by counts (learn/exploration.py): a transition to a bridge observation new in its episode
+    earns this much extra reward, divided by the square root of how often the seed has reached that
+    observation. 0: none, epsilon-greedy alone (the paper)."""
 
     def __post_init__(self):
         super().__post_init__()

@@ -19,6 +19,7 @@ from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.episode import Controls
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch
 from jaxbridge.learn.approaches import Approach, get_approach
+from jaxbridge.learn.exploration import with_exploration
 from jaxbridge.learn.learner import QLearner
 from jaxbridge.learn.learners import learner_factory
 from jaxbridge.learn.q_bridge import QBridgeParams
@@ -93,7 +94,8 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
     make_learner = learner_factory(config.learner.name)
-    learner = make_learner(config, train_env, approach.observation_size(train_env), approach.controls.observation.whole_state)
+    learner = with_exploration(make_learner(config, train_env, approach.observation_size(train_env),
+                                            approach.controls.observation.whole_state), config)
     return Setup(config, env_cls, approach, train_env, test_env, learner)
 
 
