@@ -1,0 +1,250 @@
+"""Where epsilon-greedy stops finding a fix of k decisions, and whether the count bonus keeps finding it
+(issue 56; docs/design/envs.md, "Light Switch Sequence"; docs/design/learning.md, "Exploration").
+
+    python -m bench.fix_length --seeds 0-7                  # development seeds: look
+    python -m bench.fix_length --seeds 300-331 --change "first run" --chosen-on "development seeds 0-7"
+                                                            # the figure's test seeds, with their ledger row
+
+Ours at its default settings is trained on Light Switch Sequence at every fix length k of --lengths
+(`LightSwitchSequence.of_length(k)`), once with epsilon-greedy alone and once with the count bonus
+(`count_bonus`, --bonus), each through `jaxbridge.make_train` (one jitted run per k and method; compiled,
+then timed, so the seconds per cycle of the two are measured in one process); at --gamma-lengths the
+discount per decision is swept too (--gammas, epsilon-greedy), to tell an exploration failure from a
+discounting one; and the oracle bridge on every k's test tasks. Per k and method: the test solve rate at
+the last cycle and the first cycle whose mean over seeds reaches 0.9, each with its 95% bootstrap
+interval over the seeds (jaxbridge/utils/stats.py).
+
+It writes fix_length.json (commit, command, seeds, every figure, times, memory, machine), fix_length.csv
+(one row per method, k and seed) and fix_length.png into docs/results/light_switch_sequence/; uncommitted
+code is refused (--allow-dirty: a local try, records under RUNS/records). A finished step is kept in
+RUNS/steps.json and not run again, so a stopped command continues where it left off.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import io
+import json
+import resource
+import sys
+import time
+from pathlib import Path
+
+import jax
+import numpy as np
+
+import jaxbridge
+from bench.ledger import append, seed_set
+from bench.paper import Steps, write_record
+from bench.records import RECORDS, ROOT, TEST_SETS, check_clean, git_commit, machine, refuse
+from jaxbridge.utils import stats
+
+ENV = "light_switch_sequence"
+LENGTHS = (1, 2, 3, 4, 6, 8, 10, 12)
+GAMMAS = (0.9, 0.95, 0.99)  # beside the default's 0.8
+GAMMA_LENGTHS = (4, 8)
+BONUS = 0.1  # count_bonus of the exploration rows
+SOLVED = 0.9  # "reaches" a solve rate of this
+
+
+def env_spec(k: int) -> str:
+    return f"envs_jax.light_switch_door.sequence:LightSwitchSequence_k{k}"
+
+
+def config(k: int, seeds: list[int], cycles: int, settings: list[str]):
+    return jaxbridge.make_config(env_spec(k), seeds=seeds, cycles=cycles, settings=settings)
+
+
+def timed_run(train, *args) -> tuple[object, float, float]:
+    """(output, compile seconds, run seconds) of jit(train)(*args)."""
+    start = time.perf_counter()
+    compiled = jax.jit(train).lower(*args).compile()
+    compiled_at = time.perf_counter()
+    out = jax.block_until_ready(compiled(*args))
+    return out, compiled_at - start, time.perf_counter() - compiled_at
+
+
+def train_step(k: int, seeds: list[int], cycles: int, settings: list[str]) -> dict:
+    """Ours at fix length k with `settings`: every seed's test solve rate per cycle, the seconds, the learner
+    state's bytes per seed and the plan-table misses (0: the run is train.py's)."""
+    out, compile_s, run_s = timed_run(jaxbridge.make_train(config(k, seeds, cycles, settings)))
+    state_bytes = sum(x.nbytes for x in jax.tree.leaves(out.learners)) // len(seeds)
+    return {"solve": np.round(np.asarray(out.metrics.test_solve_rate), 4).tolist(), "compile_s": round(compile_s, 1),
+            "run_s": round(run_s, 1), "s_per_cycle": round(run_s / cycles, 3), "state_bytes_per_seed": state_bytes,
+            "table_misses": int(np.asarray(out.metrics.table_misses).sum())}
+
+
+def gamma_step(k: int, seeds: list[int], cycles: int, gammas: list[float]) -> dict:
+    """Ours at fix length k at each discount (one program, the runs one after another): {gamma: solve}."""
+    base = config(k, seeds, cycles, [])
+    hypers = jax.tree.map(lambda *v: np.stack(v), *[jaxbridge.Hyper.of(dataclasses.replace(base, gamma=g)) for g in gammas])
+    out, compile_s, run_s = timed_run(jax.vmap(jaxbridge.make_train(base), in_axes=(None, 0)), None, hypers)
+    solve = np.round(np.asarray(out.metrics.test_solve_rate), 4)
+    return {"solve": {str(g): solve[i].tolist() for i, g in enumerate(gammas)}, "compile_s": round(compile_s, 1),
+            "run_s": round(run_s, 1), "table_misses": int(np.asarray(out.metrics.table_misses).sum())}
+
+
+def oracle_step(k: int, seeds: list[int]) -> dict:
+    episodes = jaxbridge.hand_made(env_spec(k), "oracle").evaluate(seeds=seeds)
+    return {"solve": [episodes.per_seed()[s] for s in seeds]}
+
+
+def first_cycle(solve: np.ndarray, axis: int = 0) -> np.ndarray:
+    """The first cycle (1-based) at which the mean over seeds (`axis`) reaches SOLVED; cycles + 1 if none."""
+    reached = np.mean(solve, axis=axis) >= SOLVED
+    return np.where(reached.any(-1), reached.argmax(-1) + 1, reached.shape[-1] + 1)
+
+
+def summary(solve: list) -> dict:
+    """A method's figures at one k: its test solve rate at the last cycle and the first cycle reaching SOLVED,
+    means over seeds with 95% bootstrap intervals (a first cycle past the run: cycles + 1, "never")."""
+    solve = np.asarray(solve, np.float64)
+    last = solve[:, -1]
+    low, high = stats.bootstrap_ci(last)
+    first_low, first_high = stats.bootstrap_ci(solve, first_cycle)
+    return {"final": round(float(last.mean()), 4), "final_ci": [round(float(low), 4), round(float(high), 4)],
+            "first": int(first_cycle(solve)), "first_ci": [int(first_low), int(first_high)]}
+
+
+def longest_solved(rows: dict[int, dict]) -> int | None:
+    """The longest k whose mean at the last cycle is at least SOLVED, with every shorter k's too."""
+    best = None
+    for k in sorted(rows):
+        if rows[k]["final"] < SOLVED:
+            break
+        best = k
+    return best
+
+
+def csv_rows(methods: dict[str, dict[int, list]], seeds: list[int]) -> str:
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["method", "k", "seed", "final_solve_rate", "first_cycle_reaching"])
+    for method, by_k in methods.items():
+        for k, solve in by_k.items():
+            solve = np.asarray(solve)
+            for i, seed in enumerate(seeds):
+                first = np.argmax(solve[i] >= SOLVED) + 1 if (solve[i] >= SOLVED).any() else ""
+                writer.writerow([method, k, seed, f"{solve[i, -1]:.4f}", first])
+    return out.getvalue()
+
+
+def figure(path: Path, table: dict[str, dict[int, dict]], oracle: dict[int, float], cycles: int, seeds: str) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for method, rows in table.items():
+        ks = sorted(rows)
+        ax.plot(ks, [rows[k]["final"] for k in ks], marker="o", label=method)
+        ax.fill_between(ks, [rows[k]["final_ci"][0] for k in ks], [rows[k]["final_ci"][1] for k in ks], alpha=0.2)
+    ax.plot(sorted(oracle), [oracle[k] for k in sorted(oracle)], "k--", label="oracle bridge")
+    ax.set(xlabel="fix length k (bridge decisions the fix takes)", ylabel=f"test solve rate at cycle {cycles}",
+           title=f"Light Switch Sequence: ours, seeds {seeds}", ylim=(-0.03, 1.03))
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def parse_args(argv) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog="python -m bench.fix_length", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    ints = lambda text: [int(v) for v in text.split(",")]
+    parser.add_argument("--seeds", required=True, help="consecutive seeds, FIRST-LAST (e.g. 0-7; a test set: 300-331)")
+    parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
+    parser.add_argument("--lengths", type=ints, default=list(LENGTHS), help="fix lengths k (default: 1,2,3,4,6,8,10,12)")
+    parser.add_argument("--gamma-lengths", type=ints, default=list(GAMMA_LENGTHS),
+                        help="the k at which the discount is swept (default: 4,8; 0: none)")
+    parser.add_argument("--gammas", type=lambda t: [float(v) for v in t.split(",")], default=list(GAMMAS),
+                        help="discounts swept beside the default 0.8 (default: 0.9,0.95,0.99)")
+    parser.add_argument("--bonus", type=float, default=BONUS, help="count_bonus of the exploration rows (default: %(default)s)")
+    parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "fix_length", help="its finished steps (default: runs/fix_length)")
+    parser.add_argument("--records", type=Path, default=RECORDS, help="where the records go (default: docs/results)")
+    parser.add_argument("--allow-dirty", action="store_true",
+                        help="run on code with uncommitted changes (a local try): the records go to RUNS/records")
+    parser.add_argument("--change", help="a test-seed run's ledger row: what changed since the set's previous run")
+    parser.add_argument("--chosen-on", help="a test-seed run's ledger row: the seeds the change was chosen on")
+    args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
+    if not set(args.gamma_lengths) <= set(args.lengths) | {0}:
+        parser.error("--gamma-lengths must be among --lengths (their default discount's runs are those)")
+    first, _, last = args.seeds.partition("-")
+    args.seed_list = list(range(int(first), int(last or first) + 1))
+    args.gamma_lengths = [k for k in args.gamma_lengths if k > 0]
+    return args
+
+
+def begin(args: argparse.Namespace) -> None:
+    """Refuse dirty code without --allow-dirty; on a test-seed set, its ledger row first."""
+    changed = check_clean("bench.fix_length", args.allow_dirty)
+    if changed:
+        args.records = args.runs.resolve() / "records"
+        print(f"bench.fix_length: uncommitted code: the records go to {args.records}", flush=True)
+    first, count = args.seed_list[0], len(args.seed_list)
+    if any(f <= s < f + n for f, n in TEST_SETS.items() for s in args.seed_list):
+        try:
+            name = seed_set(first, count)
+        except ValueError as err:
+            refuse(f"bench.fix_length: {err}")
+        if not (args.change and args.chosen_on):
+            refuse("bench.fix_length: a run on test seeds needs --change and --chosen-on (its ledger row)")
+        append(name, ENV, command_line(args), args.change, args.chosen_on, git_commit(changed))
+
+
+def command_line(args: argparse.Namespace) -> str:
+    return " ".join(["python -m bench.fix_length", *args.argv])
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    begin(args)
+    seeds, cycles, start = args.seed_list, args.cycles, time.perf_counter()
+    args.runs.mkdir(parents=True, exist_ok=True)
+    steps = Steps(args.runs / f"steps-{args.seeds}-{cycles}.json")
+    methods = {"epsilon-greedy": [], f"count bonus {args.bonus:g}": [f"count_bonus={args.bonus}"]}
+    runs = {name: {} for name in methods}
+    for k in args.lengths:
+        for name, settings in methods.items():
+            runs[name][k] = steps.run(f"{name} k={k}", lambda: train_step(k, seeds, cycles, settings))
+            print(f"k={k} {name}: {runs[name][k]['run_s']} s ({runs[name][k]['compile_s']} s compiling)", flush=True)
+    oracle = {k: steps.run(f"oracle k={k}", lambda: oracle_step(k, seeds)) for k in args.lengths}
+    gammas = {k: steps.run(f"gammas k={k}", lambda: gamma_step(k, seeds, cycles, args.gammas)) for k in args.gamma_lengths}
+
+    table = {name: {k: summary(run["solve"]) for k, run in by_k.items()} for name, by_k in runs.items()}
+    discount = {k: {g: summary(solve) for g, solve in step["solve"].items()} for k, step in gammas.items()}
+    cost = {k: round(runs[list(methods)[1]][k]["s_per_cycle"] / runs["epsilon-greedy"][k]["s_per_cycle"], 3)
+            for k in args.lengths}
+    check_clean("bench.fix_length", args.allow_dirty, during=True)
+    out = args.records / ENV
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "fix_length.csv").write_text(csv_rows({n: {k: r["solve"] for k, r in by_k.items()} for n, by_k in runs.items()}, seeds))
+    oracle_means = {k: float(np.mean(step["solve"])) for k, step in oracle.items()}
+    figure(out / "fix_length.png", table, oracle_means, cycles, args.seeds)
+    record = {"env": ENV, "commit": git_commit(), "command": command_line(args), "seeds": args.seeds, "cycles": cycles,
+              "methods": {name: settings for name, settings in methods.items()}, "solved": SOLVED,
+              "table": {n: {str(k): row for k, row in rows.items()} for n, rows in table.items()},
+              "longest_solved": {n: longest_solved(rows) for n, rows in table.items()},
+              "oracle": {str(k): round(v, 4) for k, v in oracle_means.items()},
+              "discount": {str(k): {"0.8": table["epsilon-greedy"][k], **rows} for k, rows in discount.items()},
+              "cost_ratio": {str(k): v for k, v in cost.items()},
+              "seconds": {n: {str(k): {f: r[f] for f in ("compile_s", "run_s", "s_per_cycle")} for k, r in by_k.items()}
+                          for n, by_k in runs.items()},
+              "state_bytes_per_seed": {n: by_k[args.lengths[0]]["state_bytes_per_seed"] for n, by_k in runs.items()},
+              "table_misses": sum(r["table_misses"] for by_k in runs.values() for r in by_k.values())
+              + sum(s["table_misses"] for s in gammas.values()),
+              "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10, 1),
+              "wall_s": round(time.perf_counter() - start, 1), "machine": machine()}
+    print(json.dumps({k: record[k] for k in ("longest_solved", "oracle", "cost_ratio", "state_bytes_per_seed")}))
+    for name, rows in table.items():
+        print(name + ": " + "; ".join(f"k={k} {stats.ci_text(r['final'], r['final_ci'])}, first {r['first']}"
+                                      for k, r in rows.items()))
+    for k, rows in record["discount"].items():
+        print(f"discount at k={k}: " + "; ".join(f"{g}: {stats.ci_text(r['final'], r['final_ci'])}" for g, r in rows.items()))
+    return write_record(out / "fix_length.json", record, start)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
