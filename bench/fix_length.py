@@ -8,7 +8,7 @@
 Ours at its default settings is trained on Light Switch Sequence at every fix length k of --lengths
 (`LightSwitchSequence.of_length(k)`), once with epsilon-greedy alone and once with the count bonus
 (`count_bonus`, --bonus), each through `jaxbridge.make_train` (one jitted run per k and method; compiled,
-then timed, so the seconds per cycle of the two are measured in one process); at --gamma-lengths the
+then timed: the CPU seconds per cycle of the two, measured in one process, give the cost ratio); at --gamma-lengths the
 discount per decision is swept too (--gammas, epsilon-greedy), to tell an exploration failure from a
 discounting one; and the oracle bridge on every k's test tasks. Per k and method: the test solve rate at
 the last cycle and the first cycle whose mean over seeds reaches 0.9, each with its 95% bootstrap
@@ -56,22 +56,24 @@ def config(k: int, seeds: list[int], cycles: int, settings: list[str]):
     return jaxbridge.make_config(env_spec(k), seeds=seeds, cycles=cycles, settings=settings)
 
 
-def timed_run(train, *args) -> tuple[object, float, float]:
-    """(output, compile seconds, run seconds) of jit(train)(*args)."""
+def timed_run(train, *args) -> tuple[object, float, float, float]:
+    """(output, compile seconds, run seconds, run CPU seconds) of jit(train)(*args). The CPU seconds are this
+    process's (every thread's), which other processes on a shared machine move less than the wall time."""
     start = time.perf_counter()
     compiled = jax.jit(train).lower(*args).compile()
-    compiled_at = time.perf_counter()
+    compiled_at, cpu_at = time.perf_counter(), time.process_time()
     out = jax.block_until_ready(compiled(*args))
-    return out, compiled_at - start, time.perf_counter() - compiled_at
+    return out, compiled_at - start, time.perf_counter() - compiled_at, time.process_time() - cpu_at
 
 
 def train_step(k: int, seeds: list[int], cycles: int, settings: list[str]) -> dict:
     """Ours at fix length k with `settings`: every seed's test solve rate per cycle, the seconds, the learner
     state's bytes per seed and the plan-table misses (0: the run is train.py's)."""
-    out, compile_s, run_s = timed_run(jaxbridge.make_train(config(k, seeds, cycles, settings)))
+    out, compile_s, run_s, cpu_s = timed_run(jaxbridge.make_train(config(k, seeds, cycles, settings)))
     state_bytes = sum(x.nbytes for x in jax.tree.leaves(out.learners)) // len(seeds)
     return {"solve": np.round(np.asarray(out.metrics.test_solve_rate), 4).tolist(), "compile_s": round(compile_s, 1),
-            "run_s": round(run_s, 1), "s_per_cycle": round(run_s / cycles, 3), "state_bytes_per_seed": state_bytes,
+            "run_s": round(run_s, 1), "s_per_cycle": round(run_s / cycles, 3), "cpu_s_per_cycle": round(cpu_s / cycles, 3),
+            "state_bytes_per_seed": state_bytes,
             "table_misses": int(np.asarray(out.metrics.table_misses).sum())}
 
 
@@ -79,7 +81,7 @@ def gamma_step(k: int, seeds: list[int], cycles: int, gammas: list[float]) -> di
     """Ours at fix length k at each discount (one program, the runs one after another): {gamma: solve}."""
     base = config(k, seeds, cycles, [])
     hypers = jax.tree.map(lambda *v: np.stack(v), *[jaxbridge.Hyper.of(dataclasses.replace(base, gamma=g)) for g in gammas])
-    out, compile_s, run_s = timed_run(jax.vmap(jaxbridge.make_train(base), in_axes=(None, 0)), None, hypers)
+    out, compile_s, run_s, _ = timed_run(jax.vmap(jaxbridge.make_train(base), in_axes=(None, 0)), None, hypers)
     solve = np.round(np.asarray(out.metrics.test_solve_rate), 4)
     return {"solve": {str(g): solve[i].tolist() for i, g in enumerate(gammas)}, "compile_s": round(compile_s, 1),
             "run_s": round(run_s, 1), "table_misses": int(np.asarray(out.metrics.table_misses).sum())}
@@ -168,7 +170,6 @@ def parse_args(argv) -> argparse.Namespace:
     parser.add_argument("--change", help="a test-seed run's ledger row: what changed since the set's previous run")
     parser.add_argument("--chosen-on", help="a test-seed run's ledger row: the seeds the change was chosen on")
     args = parser.parse_args(argv)
-    args.argv = list(sys.argv[1:] if argv is None else argv)
     if not set(args.gamma_lengths) <= set(args.lengths) | {0}:
         parser.error("--gamma-lengths must be among --lengths (their default discount's runs are those)")
     first, _, last = args.seeds.partition("-")
@@ -195,7 +196,14 @@ def begin(args: argparse.Namespace) -> None:
 
 
 def command_line(args: argparse.Namespace) -> str:
-    return " ".join(["python -m bench.fix_length", *args.argv])
+    """The command as the record and the ledger show it: the flags that differ from their defaults (not the
+    ledger's reasons)."""
+    flags = [("cycles", args.cycles, 100), ("lengths", args.lengths, list(LENGTHS)),
+             ("gamma-lengths", args.gamma_lengths, list(GAMMA_LENGTHS)), ("gammas", args.gammas, list(GAMMAS)),
+             ("bonus", args.bonus, BONUS)]
+    shown = lambda v: ",".join(f"{x:g}" for x in v) if isinstance(v, list) else f"{v:g}"
+    return f"python -m bench.fix_length --seeds {args.seeds}" + "".join(
+        f" --{name} {shown(value) or 0}" for name, value, default in flags if value != default)
 
 
 def main(argv=None) -> int:
@@ -215,7 +223,7 @@ def main(argv=None) -> int:
 
     table = {name: {k: summary(run["solve"]) for k, run in by_k.items()} for name, by_k in runs.items()}
     discount = {k: {g: summary(solve) for g, solve in step["solve"].items()} for k, step in gammas.items()}
-    cost = {k: round(runs[list(methods)[1]][k]["s_per_cycle"] / runs["epsilon-greedy"][k]["s_per_cycle"], 3)
+    cost = {k: round(runs[list(methods)[1]][k]["cpu_s_per_cycle"] / runs["epsilon-greedy"][k]["cpu_s_per_cycle"], 3)
             for k in args.lengths}
     check_clean("bench.fix_length", args.allow_dirty, during=True)
     out = args.records / ENV
@@ -230,7 +238,8 @@ def main(argv=None) -> int:
               "oracle": {str(k): round(v, 4) for k, v in oracle_means.items()},
               "discount": {str(k): {"0.8": table["epsilon-greedy"][k], **rows} for k, rows in discount.items()},
               "cost_ratio": {str(k): v for k, v in cost.items()},
-              "seconds": {n: {str(k): {f: r[f] for f in ("compile_s", "run_s", "s_per_cycle")} for k, r in by_k.items()}
+              "seconds": {n: {str(k): {f: r[f] for f in ("compile_s", "run_s", "s_per_cycle", "cpu_s_per_cycle")}
+                              for k, r in by_k.items()}
                           for n, by_k in runs.items()},
               "state_bytes_per_seed": {n: by_k[args.lengths[0]]["state_bytes_per_seed"] for n, by_k in runs.items()},
               "table_misses": sum(r["table_misses"] for by_k in runs.values() for r in by_k.values())
