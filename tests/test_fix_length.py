@@ -226,3 +226,16 @@ def test_a_random_bridge_solves_short_fixes_and_no_long_ones(episodes):
     rate = {k: solved[tests & (episodes["dials"] == k)].mean() for k in LENGTHS}
     assert rate[1] >= 0.25 and rate[4] <= 0.1
     assert rate[8] == rate[12] == 0.0
+
+
+# ---- bench.fix_length's figures --------------------------------------------------------------------------
+
+def test_the_bench_finds_the_first_cycle_at_0_9_and_the_longest_k_solved_with_every_shorter_one():
+    from bench.fix_length import first_cycle, longest_solved, summary
+
+    solve = np.array([[0.0, 0.8, 1.0, 1.0], [0.0, 1.0, 0.9, 1.0]])  # the mean reaches 0.9 at cycle 2
+    assert int(first_cycle(solve)) == 2 and int(first_cycle(solve[:, :1])) == 2  # never: one past the run
+    row = summary(solve)
+    assert (row["final"], row["final_ci"], row["first"]) == (1.0, [1.0, 1.0], 2) and row["first_ci"][0] == 2
+    rows = {k: {"final": final} for k, final in [(1, 1.0), (2, 0.95), (4, 0.5), (6, 0.95)]}
+    assert longest_solved(rows) == 2 and longest_solved({1: {"final": 0.2}}) is None
