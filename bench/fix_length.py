@@ -10,7 +10,8 @@ Ours at its default settings is trained on Light Switch Sequence at every fix le
 (`count_bonus`, --bonus), each through `jaxbridge.make_train` (one jitted run per k and method; compiled,
 then timed: the CPU seconds per cycle of the two, measured in one process, give the cost ratio); at --gamma-lengths the
 discount per decision is swept too (--gammas, epsilon-greedy), to tell an exploration failure from a
-discounting one; and the oracle bridge on every k's test tasks. Per k and method: the test solve rate at
+discounting one; the oracle bridge on every k's test tasks; and each of the paper's envs (--paper-envs)
+trained with and without the bonus, to show what it does where the fixes are short. Per k and method: the test solve rate at
 the last cycle and the first cycle whose mean over seeds reaches 0.9, each with its 95% bootstrap
 interval over the seeds (jaxbridge/utils/stats.py).
 
@@ -37,7 +38,7 @@ import numpy as np
 import jaxbridge
 from bench.ledger import append, seed_set
 from bench.paper import Steps, write_record
-from bench.records import RECORDS, ROOT, TEST_SETS, check_clean, git_commit, machine, refuse
+from bench.records import ENVS, RECORDS, ROOT, TEST_SETS, check_clean, git_commit, machine, refuse
 from jaxbridge.utils import stats
 
 ENV = "light_switch_sequence"
@@ -52,8 +53,9 @@ def env_spec(k: int) -> str:
     return f"envs_jax.light_switch_door.sequence:LightSwitchSequence_k{k}"
 
 
-def config(k: int, seeds: list[int], cycles: int, settings: list[str]):
-    return jaxbridge.make_config(env_spec(k), seeds=seeds, cycles=cycles, settings=settings)
+def config(k: int | str, seeds: list[int], cycles: int, settings: list[str]):
+    """Ours' config at fix length k (or on the env named k)."""
+    return jaxbridge.make_config(env_spec(k) if isinstance(k, int) else k, seeds=seeds, cycles=cycles, settings=settings)
 
 
 def timed_run(train, *args) -> tuple[object, float, float, float]:
@@ -66,8 +68,8 @@ def timed_run(train, *args) -> tuple[object, float, float, float]:
     return out, compiled_at - start, time.perf_counter() - compiled_at, time.process_time() - cpu_at
 
 
-def train_step(k: int, seeds: list[int], cycles: int, settings: list[str]) -> dict:
-    """Ours at fix length k with `settings`: every seed's test solve rate per cycle, the seconds, the learner
+def train_step(k: int | str, seeds: list[int], cycles: int, settings: list[str]) -> dict:
+    """Ours at fix length k (or on the env named k) with `settings`: every seed's test solve rate per cycle, the seconds, the learner
     state's bytes per seed and the plan-table misses (0: the run is train.py's)."""
     out, compile_s, run_s, cpu_s = timed_run(jaxbridge.make_train(config(k, seeds, cycles, settings)))
     state_bytes = sum(x.nbytes for x in jax.tree.leaves(out.learners)) // len(seeds)
@@ -162,6 +164,8 @@ def parse_args(argv) -> argparse.Namespace:
                         help="the k at which the discount is swept (default: 4,8; 0: none)")
     parser.add_argument("--gammas", type=lambda t: [float(v) for v in t.split(",")], default=list(GAMMAS),
                         help="discounts swept beside the default 0.8 (default: 0.9,0.95,0.99)")
+    parser.add_argument("--paper-envs", type=lambda t: [] if t == "none" else t.split(","), default=list(ENVS),
+                        help="the paper's envs, each trained with and without the bonus (default: all three; none)")
     parser.add_argument("--bonus", type=float, default=BONUS, help="count_bonus of the exploration rows (default: %(default)s)")
     parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "fix_length", help="its finished steps (default: runs/fix_length)")
     parser.add_argument("--records", type=Path, default=RECORDS, help="where the records go (default: docs/results)")
@@ -200,8 +204,8 @@ def command_line(args: argparse.Namespace) -> str:
     ledger's reasons)."""
     flags = [("cycles", args.cycles, 100), ("lengths", args.lengths, list(LENGTHS)),
              ("gamma-lengths", args.gamma_lengths, list(GAMMA_LENGTHS)), ("gammas", args.gammas, list(GAMMAS)),
-             ("bonus", args.bonus, BONUS)]
-    shown = lambda v: ",".join(f"{x:g}" for x in v) if isinstance(v, list) else f"{v:g}"
+             ("bonus", args.bonus, BONUS), ("paper-envs", args.paper_envs, list(ENVS))]
+    shown = lambda v: ",".join(x if isinstance(x, str) else f"{x:g}" for x in v) if isinstance(v, list) else f"{v:g}"
     return f"python -m bench.fix_length --seeds {args.seeds}" + "".join(
         f" --{name} {shown(value) or 0}" for name, value, default in flags if value != default)
 
@@ -220,6 +224,8 @@ def main(argv=None) -> int:
             print(f"k={k} {name}: {runs[name][k]['run_s']} s ({runs[name][k]['compile_s']} s compiling)", flush=True)
     oracle = {k: steps.run(f"oracle k={k}", lambda: oracle_step(k, seeds)) for k in args.lengths}
     gammas = {k: steps.run(f"gammas k={k}", lambda: gamma_step(k, seeds, cycles, args.gammas)) for k in args.gamma_lengths}
+    paper = {env: {name: steps.run(f"{name} {env}", lambda: train_step(env, seeds, cycles, settings))
+                   for name, settings in methods.items()} for env in args.paper_envs}
 
     table = {name: {k: summary(run["solve"]) for k, run in by_k.items()} for name, by_k in runs.items()}
     discount = {k: {g: summary(solve) for g, solve in step["solve"].items()} for k, step in gammas.items()}
@@ -238,12 +244,15 @@ def main(argv=None) -> int:
               "oracle": {str(k): round(v, 4) for k, v in oracle_means.items()},
               "discount": {str(k): {"0.8": table["epsilon-greedy"][k], **rows} for k, rows in discount.items()},
               "cost_ratio": {str(k): v for k, v in cost.items()},
+              "paper_envs": {env: {name: {**summary(run["solve"]), "cpu_s_per_cycle": run["cpu_s_per_cycle"]}
+                                   for name, run in by_method.items()} for env, by_method in paper.items()},
               "seconds": {n: {str(k): {f: r[f] for f in ("compile_s", "run_s", "s_per_cycle", "cpu_s_per_cycle")}
                               for k, r in by_k.items()}
                           for n, by_k in runs.items()},
               "state_bytes_per_seed": {n: by_k[args.lengths[0]]["state_bytes_per_seed"] for n, by_k in runs.items()},
               "table_misses": sum(r["table_misses"] for by_k in runs.values() for r in by_k.values())
-              + sum(s["table_misses"] for s in gammas.values()),
+              + sum(s["table_misses"] for s in gammas.values())
+              + sum(r["table_misses"] for by_method in paper.values() for r in by_method.values()),
               "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10, 1),
               "wall_s": round(time.perf_counter() - start, 1), "machine": machine()}
     print(json.dumps({k: record[k] for k in ("longest_solved", "oracle", "cost_ratio", "state_bytes_per_seed")}))
@@ -252,6 +261,8 @@ def main(argv=None) -> int:
                                       for k, r in rows.items()))
     for k, rows in record["discount"].items():
         print(f"discount at k={k}: " + "; ".join(f"{g}: {stats.ci_text(r['final'], r['final_ci'])}" for g, r in rows.items()))
+    for env, rows in record["paper_envs"].items():
+        print(f"{env}: " + "; ".join(f"{m} {stats.ci_text(r['final'], r['final_ci'])}" for m, r in rows.items()))
     return write_record(out / "fix_length.json", record, start)
 
 

@@ -1,0 +1,96 @@
+"""docs/results/fix_length.md's block, rendered from bench.fix_length's records
+(docs/results/light_switch_sequence/fix_length.json): solve rate per fix length k with epsilon-greedy and
+with the count bonus, the longest k each solves, the discount sweep, the cost and the memory."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from bench.records import RECORDS
+from bench.results_blocks import ENV_TITLES, commit_text, machine_text, read_json
+from jaxbridge.utils import stats
+
+FOLDER = RECORDS / "light_switch_sequence"
+
+
+def first_text(row: dict, cycles: int) -> str:
+    """The first cycle whose mean reaches the bar, with its interval; past the run: "not reached"."""
+    shown = lambda c: f"> {cycles}" if c > cycles else str(c)
+    if row["first"] > cycles:
+        return "not reached" + ("" if row["first_ci"][0] > cycles else f" [{shown(row['first_ci'][0])}, > {cycles}]")
+    low, high = row["first_ci"]
+    return row["first"].__str__() + ("" if low == high else f" [{shown(low)}, {shown(high)}]")
+
+
+def final_text(row: dict) -> str:
+    return stats.ci_text(row["final"], row["final_ci"])
+
+
+def length_table(run: dict) -> list[str]:
+    methods, cycles = list(run["table"]), run["cycles"]
+    head = ["k", "oracle"] + [f"{m}: cycle {cycles} | {m}: first cycle at {run['solved']}" for m in methods]
+    lines = ["| " + " | ".join(head) + " | CPU seconds per cycle, bonus / epsilon-greedy |",
+             "|---" * (2 + 2 * len(methods) + 1) + "|"]
+    for k in run["table"][methods[0]]:
+        cells = [k, f"{run['oracle'][k]:.2f}"]
+        cells += [f"{final_text(run['table'][m][k])} | {first_text(run['table'][m][k], cycles)}" for m in methods]
+        lines.append("| " + " | ".join(cells) + f" | {run['cost_ratio'][k]:.2f} |")
+    return lines
+
+
+def longest_text(run: dict) -> str:
+    """The longest k each method solves, and whether the bonus extends epsilon-greedy's by 2 or more."""
+    best = run["longest_solved"]
+    said = "; ".join(f"{m}: k = {k}" if k else f"{m}: none" for m, k in best.items())
+    plain, bonus = best.get("epsilon-greedy") or 0, [k or 0 for m, k in best.items() if m != "epsilon-greedy"][0]
+    verdict = (f"the count bonus extends it by {bonus - plain}" if bonus - plain >= 2 else
+               f"the count bonus does not extend it by 2 or more (by {bonus - plain})")
+    longest = max(int(k) for k in run["oracle"])
+    note = f" (the longest k run: {longest}; the bonus may go further)" if bonus == longest else ""
+    return (f"The longest k at which ours' mean test solve rate at cycle {run['cycles']} is at least {run['solved']}, "
+            f"with every shorter k's too: {said}; {verdict}{note}.")
+
+
+def discount_table(run: dict) -> list[str]:
+    if not run["discount"]:
+        return []
+    ks = list(run["discount"])
+    lines = ["Epsilon-greedy at other discounts per decision (`gamma`; the default 0.8), test solve rate at cycle "
+             f"{run['cycles']}:", "", "| gamma | " + " | ".join(f"k = {k}" for k in ks) + " |", "|---" * (len(ks) + 1) + "|"]
+    for gamma in run["discount"][ks[0]]:
+        lines.append(f"| {gamma} | " + " | ".join(final_text(run["discount"][k][gamma]) for k in ks) + " |")
+    return lines + [""]
+
+
+def paper_table(run: dict) -> list[str]:
+    """The paper's envs, ours with and without the bonus: test solve rate at the last cycle, the first cycle at
+    the bar, the cost."""
+    envs = run.get("paper_envs") or {}
+    if not envs:
+        return []
+    methods = list(next(iter(envs.values())))
+    lines = [f"The paper's envs, where every fix is short: ours at its default settings with and without the bonus "
+             f"(same seeds, {run['cycles']} cycles).", "",
+             "| env | " + " | ".join(f"{m}: cycle {run['cycles']} | {m}: first cycle at {run['solved']}" for m in methods)
+             + " | CPU seconds per cycle, bonus / epsilon-greedy |", "|---" * (2 * len(methods) + 2) + "|"]
+    for env, rows in envs.items():
+        ratio = rows[methods[1]]["cpu_s_per_cycle"] / rows[methods[0]]["cpu_s_per_cycle"]
+        lines.append(f"| {ENV_TITLES[env]} | " + " | ".join(f"{final_text(rows[m])} | {first_text(rows[m], run['cycles'])}"
+                                                          for m in methods) + f" | {ratio:.2f} |")
+    return lines + [""]
+
+
+def block(folder: Path = FOLDER) -> str:
+    run = read_json(folder / "fix_length.json")
+    if run is None:
+        return "_Not generated yet: `python -m bench.fix_length --seeds 0-7`._\n"
+    state = run["state_bytes_per_seed"]
+    memory = ", ".join(f"{m} {b / 2**10:,.0f} KiB" for m, b in state.items())
+    lines = [f"Seeds {run['seeds']}, {run['cycles']} cycles, ours at its default settings; each cell: the mean over "
+             "seeds [95% bootstrap CI]. The oracle: the mean test solve rate of the hand-written bridge on the same tasks.",
+             "", *length_table(run), "", longest_text(run), "", *discount_table(run), *paper_table(run),
+             f"Memory: the learner state per seed, {memory}; the command's peak RSS {run['peak_rss_mib']:,.0f} MiB. "
+             "The cost: each run's compiled program timed alone, the two methods one after another in one process, "
+             "in the process's CPU seconds (on a shared machine, other processes move them less than the wall time).", "",
+             f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.", "",
+             f"![Light Switch Sequence, solve rate vs fix length]({folder.name}/fix_length.png)", ""]
+    return "\n".join(lines)
