@@ -157,7 +157,8 @@ def parse_args(argv) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog="python -m bench.fix_length", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     ints = lambda text: [int(v) for v in text.split(",")]
-    parser.add_argument("--seeds", required=True, help="consecutive seeds, FIRST-LAST (e.g. 0-7; a test set: 300-331)")
+    parser.add_argument("--seeds", default="0-7",
+                        help="consecutive seeds, FIRST-LAST (default: %(default)s, development seeds; a test set: 300-331)")
     parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
     parser.add_argument("--lengths", type=ints, default=list(LENGTHS), help="fix lengths k (default: 1,2,3,4,6,8,10,12)")
     parser.add_argument("--gamma-lengths", type=ints, default=list(GAMMA_LENGTHS),
