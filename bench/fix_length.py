@@ -27,7 +27,6 @@ import csv
 import dataclasses
 import io
 import json
-import resource
 import sys
 import time
 from pathlib import Path
@@ -211,59 +210,84 @@ def command_line(args: argparse.Namespace) -> str:
         f" --{name} {shown(value) or 0}" for name, value, default in flags if value != default)
 
 
-def main(argv=None) -> int:
-    args = parse_args(argv)
-    begin(args)
-    seeds, cycles, start = args.seed_list, args.cycles, time.perf_counter()
+def run_steps(args: argparse.Namespace, methods: dict[str, list[str]]) -> dict:
+    """Every step's figures (a finished one read back): {"runs": {method: {k: ...}}, "oracle": {k: ...},
+    "gammas": {k: ...}, "paper": {env: {method: ...}}, "steps": {step: {"commit": the code it ran at}}}."""
+    seeds, cycles = args.seed_list, args.cycles
     args.runs.mkdir(parents=True, exist_ok=True)
-    steps = Steps(args.runs / f"steps-{args.seeds}-{cycles}.json")
-    methods = {"epsilon-greedy": [], f"count bonus {args.bonus:g}": [f"count_bonus={args.bonus}"]}
+    steps, commits = Steps(args.runs / f"steps-{args.seeds}-{cycles}.json"), {}
+
+    def step(name: str, work) -> dict:
+        commits[name] = (figures := steps.run(name, work))["commit"]
+        return figures
+
     runs = {name: {} for name in methods}
     for k in args.lengths:
         for name, settings in methods.items():
-            runs[name][k] = steps.run(f"{name} k={k}", lambda: train_step(k, seeds, cycles, settings))
+            runs[name][k] = step(f"{name} k={k}", lambda: train_step(k, seeds, cycles, settings))
             print(f"k={k} {name}: {runs[name][k]['run_s']} s ({runs[name][k]['compile_s']} s compiling)", flush=True)
-    oracle = {k: steps.run(f"oracle k={k}", lambda: oracle_step(k, seeds)) for k in args.lengths}
-    gammas = {k: steps.run(f"gammas k={k}", lambda: gamma_step(k, seeds, cycles, args.gammas)) for k in args.gamma_lengths}
-    paper = {env: {name: steps.run(f"{name} {env}", lambda: train_step(env, seeds, cycles, settings))
-                   for name, settings in methods.items()} for env in args.paper_envs}
+    return {"runs": runs,
+            "oracle": {k: step(f"oracle k={k}", lambda: oracle_step(k, seeds)) for k in args.lengths},
+            "gammas": {k: step(f"gammas k={k}", lambda: gamma_step(k, seeds, cycles, args.gammas))
+                       for k in args.gamma_lengths},
+            "paper": {env: {name: step(f"{name} {env}", lambda: train_step(env, seeds, cycles, settings))
+                            for name, settings in methods.items()} for env in args.paper_envs},
+            "steps": {name: {"commit": commit} for name, commit in commits.items()}}
 
+
+def make_record(args: argparse.Namespace, methods: dict[str, list[str]], done: dict) -> dict:
+    """The record of the steps' figures: each method's summary per k and on the paper's envs, the longest k
+    solved, the oracle, the discount sweep, the cost and the memory."""
+    runs, eps, bonus = done["runs"], *methods
     table = {name: {k: summary(run["solve"]) for k, run in by_k.items()} for name, by_k in runs.items()}
-    discount = {k: {g: summary(solve) for g, solve in step["solve"].items()} for k, step in gammas.items()}
-    cost = {k: round(runs[list(methods)[1]][k]["cpu_s_per_cycle"] / runs["epsilon-greedy"][k]["cpu_s_per_cycle"], 3)
-            for k in args.lengths}
-    check_clean("bench.fix_length", args.allow_dirty, during=True)
-    out = args.records / ENV
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "fix_length.csv").write_text(csv_rows({n: {k: r["solve"] for k, r in by_k.items()} for n, by_k in runs.items()}, seeds))
-    oracle_means = {k: float(np.mean(step["solve"])) for k, step in oracle.items()}
-    figure(out / "fix_length.png", table, oracle_means, cycles, args.seeds)
-    record = {"env": ENV, "commit": git_commit(), "command": command_line(args), "seeds": args.seeds, "cycles": cycles,
-              "methods": {name: settings for name, settings in methods.items()}, "solved": SOLVED,
-              "table": {n: {str(k): row for k, row in rows.items()} for n, rows in table.items()},
-              "longest_solved": {n: longest_solved(rows) for n, rows in table.items()},
-              "oracle": {str(k): round(v, 4) for k, v in oracle_means.items()},
-              "discount": {str(k): {"0.8": table["epsilon-greedy"][k], **rows} for k, rows in discount.items()},
-              "cost_ratio": {str(k): v for k, v in cost.items()},
-              "paper_envs": {env: {name: {**summary(run["solve"]), "cpu_s_per_cycle": run["cpu_s_per_cycle"]}
-                                   for name, run in by_method.items()} for env, by_method in paper.items()},
-              "seconds": {n: {str(k): {f: r[f] for f in ("compile_s", "run_s", "s_per_cycle", "cpu_s_per_cycle")}
-                              for k, r in by_k.items()}
-                          for n, by_k in runs.items()},
-              "state_bytes_per_seed": {n: by_k[args.lengths[0]]["state_bytes_per_seed"] for n, by_k in runs.items()},
-              "table_misses": sum(r["table_misses"] for by_k in runs.values() for r in by_k.values())
-              + sum(s["table_misses"] for s in gammas.values())
-              + sum(r["table_misses"] for by_method in paper.values() for r in by_method.values()),
-              "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10, 1),
-              "wall_s": round(time.perf_counter() - start, 1), "machine": machine()}
+    discount = {k: {"0.8": table[eps][k], **{g: summary(solve) for g, solve in step["solve"].items()}}
+                for k, step in done["gammas"].items()}
+    trainings = [r for by_k in runs.values() for r in by_k.values()] + list(done["gammas"].values()) + [
+        r for by_method in done["paper"].values() for r in by_method.values()]
+    return {"env": ENV, "commit": git_commit(), "command": command_line(args), "seeds": args.seeds, "cycles": args.cycles,
+            "methods": methods, "solved": SOLVED,
+            "table": {n: {str(k): row for k, row in rows.items()} for n, rows in table.items()},
+            "longest_solved": {n: longest_solved(rows) for n, rows in table.items()},
+            "oracle": {str(k): round(float(np.mean(step["solve"])), 4) for k, step in done["oracle"].items()},
+            "discount": {str(k): rows for k, rows in discount.items()},
+            "cost_ratio": {str(k): round(runs[bonus][k]["cpu_s_per_cycle"] / runs[eps][k]["cpu_s_per_cycle"], 3)
+                           for k in args.lengths},
+            "paper_envs": {env: {name: {**summary(run["solve"]), "cpu_s_per_cycle": run["cpu_s_per_cycle"]}
+                                 for name, run in by_method.items()} for env, by_method in done["paper"].items()},
+            "seconds": {n: {str(k): {f: r[f] for f in ("compile_s", "run_s", "s_per_cycle", "cpu_s_per_cycle")}
+                            for k, r in by_k.items()} for n, by_k in runs.items()},
+            "state_bytes_per_seed": {n: by_k[args.lengths[0]]["state_bytes_per_seed"] for n, by_k in runs.items()},
+            "table_misses": sum(r["table_misses"] for r in trainings),
+            "training_s": round(sum(r["compile_s"] + r["run_s"] for r in trainings), 1), "steps": done["steps"],
+            "machine": machine()}
+
+
+def report(record: dict) -> None:
     print(json.dumps({k: record[k] for k in ("longest_solved", "oracle", "cost_ratio", "state_bytes_per_seed")}))
-    for name, rows in table.items():
+    for name, rows in record["table"].items():
         print(name + ": " + "; ".join(f"k={k} {stats.ci_text(r['final'], r['final_ci'])}, first {r['first']}"
                                       for k, r in rows.items()))
     for k, rows in record["discount"].items():
         print(f"discount at k={k}: " + "; ".join(f"{g}: {stats.ci_text(r['final'], r['final_ci'])}" for g, r in rows.items()))
     for env, rows in record["paper_envs"].items():
         print(f"{env}: " + "; ".join(f"{m} {stats.ci_text(r['final'], r['final_ci'])}" for m, r in rows.items()))
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    begin(args)
+    start = time.perf_counter()
+    methods = {"epsilon-greedy": [], f"count bonus {args.bonus:g}": [f"count_bonus={args.bonus}"]}
+    done = run_steps(args, methods)
+    record = make_record(args, methods, done)
+    check_clean("bench.fix_length", args.allow_dirty, during=True)
+    out = args.records / ENV
+    out.mkdir(parents=True, exist_ok=True)
+    solve = {name: {k: run["solve"] for k, run in by_k.items()} for name, by_k in done["runs"].items()}
+    (out / "fix_length.csv").write_text(csv_rows(solve, args.seed_list))
+    table = {n: {int(k): row for k, row in rows.items()} for n, rows in record["table"].items()}
+    figure(out / "fix_length.png", table, {int(k): v for k, v in record["oracle"].items()}, args.cycles, args.seeds)
+    report(record)
     return write_record(out / "fix_length.json", record, start)
 
 

@@ -88,9 +88,10 @@ def block(folder: Path = FOLDER) -> str:
     lines = [f"Seeds {run['seeds']}, {run['cycles']} cycles, ours at its default settings; each cell: the mean over "
              "seeds [95% bootstrap CI]. The oracle: the mean test solve rate of the hand-written bridge on the same tasks.",
              "", *length_table(run), "", longest_text(run), "", *discount_table(run), *paper_table(run),
-             f"Memory: the learner state per seed, {memory}; the command's peak RSS {run['peak_rss_mib']:,.0f} MiB. "
+             f"Memory: the learner state per seed, {memory}. "
              "The cost: each run's compiled program timed alone, the two methods one after another in one process, "
              "in the process's CPU seconds (on a shared machine, other processes move them less than the wall time).", "",
-             f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.", "",
+             f"`{run['command']}`: its trainings {run['training_s']:,.0f} s (compiling included) on "
+             f"{machine_text(run['machine'])}, {commit_text(run)}.", "",
              f"![Light Switch Sequence, solve rate vs fix length]({folder.name}/fix_length.png)", ""]
     return "\n".join(lines)
