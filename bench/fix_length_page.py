@@ -27,12 +27,13 @@ def final_text(row: dict) -> str:
 
 def length_table(run: dict) -> list[str]:
     methods, cycles = list(run["table"]), run["cycles"]
-    head = ["k", "oracle"] + [f"{m}: cycle {cycles} | {m}: first cycle at {run['solved']}" for m in methods]
+    head = ["k", "oracle"] + [f"{m}: cycle {cycles} | first cycle at {run['solved']} | highest (its cycle)" for m in methods]
     lines = ["| " + " | ".join(head) + " | CPU seconds per cycle, bonus / epsilon-greedy |",
-             "|---" * (2 + 2 * len(methods) + 1) + "|"]
+             "|---" * (2 + 3 * len(methods) + 1) + "|"]
     for k in run["table"][methods[0]]:
         cells = [k, f"{run['oracle'][k]:.2f}"]
-        cells += [f"{final_text(run['table'][m][k])} | {first_text(run['table'][m][k], cycles)}" for m in methods]
+        cells += [f"{final_text(row)} | {first_text(row, cycles)} | {row['best']:.2f} ({row['best_cycle']})"
+                  for row in (run["table"][m][k] for m in methods)]
         lines.append("| " + " | ".join(cells) + f" | {run['cost_ratio'][k]:.2f} |")
     return lines
 
