@@ -80,6 +80,16 @@ def paper_table(run: dict) -> list[str]:
     return lines + [""]
 
 
+def commits_text(run: dict) -> str:
+    """The record's commit, and how many of its steps ran at each other commit (a continued command's)."""
+    others = {}
+    for step in run["steps"].values():
+        if step["commit"] != run["commit"]:
+            others[step["commit"]] = others.get(step["commit"], 0) + 1
+    shown = "; ".join(f"{n} at {commit_text({'commit': c})[len('commit '):]}" for c, n in others.items())
+    return commit_text({"commit": run["commit"]}) + (f" (of its {len(run['steps'])} steps, {shown})" if shown else "")
+
+
 def block(folder: Path = FOLDER) -> str:
     run = read_json(folder / "fix_length.json")
     if run is None:
@@ -93,6 +103,6 @@ def block(folder: Path = FOLDER) -> str:
              "The cost: each run's compiled program timed alone, the two methods one after another in one process, "
              "in the process's CPU seconds (on a shared machine, other processes move them less than the wall time).", "",
              f"`{run['command']}`: its trainings {run['training_s']:,.0f} s (compiling included) on "
-             f"{machine_text(run['machine'])}, {commit_text(run)}.", "",
+             f"{machine_text(run['machine'])}, {commits_text(run)}.", "",
              f"![Light Switch Sequence, solve rate vs fix length]({folder.name}/fix_length.png)", ""]
     return "\n".join(lines)
