@@ -6,10 +6,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 from flax import struct
 
 from envs_jax.base import NoveltyEnv, SkillCall
 from jaxbridge.core.observations import FEATURES, Observation
+from jaxbridge.core.signatures import signature_features, signature_width
 
 PLANNER, BRIDGE = 0, 1  # who is in control of an episode
 
@@ -33,22 +35,31 @@ class Controls:
     # the planner, which replans, or with `resume_plan` continues that plan from the state reached.
     plan_progress: bool = False
     resume_plan: bool = False
+    # The failure signature (issue 54, core/signatures.py): the stalled operator's skill and the type of
+    # the object it stalled at, appended to what the bridge sees as two one-hots.
+    signature: bool = False
 
 
 def observation_size(env: NoveltyEnv, controls: Controls) -> int:
-    return controls.observation.size(env)
+    return controls.observation.size(env) + (signature_width(env) if controls.signature else 0)
 
 
-def observation(env: NoveltyEnv, controls: Controls, state: Any, stuck_state: Any) -> jax.Array:
+def observation(env: NoveltyEnv, controls: Controls, state: Any, stuck_state: Any,
+                stalled_skill: jax.Array | int = -1) -> jax.Array:
     """What the bridge sees (core/observations.py): the env's object-centric features, the full padded
-    state, the closest object's by the paper's rule, or the object tokens."""
-    return controls.observation.observe(env, state, stuck_state)
+    state, the closest object's by the paper's rule, or the object tokens; with `signature`, then the
+    failure signature of the stall (`stalled_skill`, the object at the robot in `stuck_state`)."""
+    seen = controls.observation.observe(env, state, stuck_state)
+    if not controls.signature:
+        return seen
+    return jnp.concatenate([seen, signature_features(env, stalled_skill, stuck_state)])
 
 
 @struct.dataclass
 class Episode:
     env_state: Any
     stuck_state: Any  # the state at which control last passed to the bridge
+    stalled_skill: jax.Array  # int32: the skill of the operator that stalled there (-1: none, no plan)
     t: jax.Array  # int32: env steps taken
     horizon: jax.Array  # int32
     done: jax.Array  # bool

@@ -8,7 +8,8 @@ Per env step, for a whole batch of episodes (any mix of seeds and tasks):
 3. planner turn: when its skill has finished, the planner checks that the atoms its model predicted
    hold, then starts the next operator's skill. It is *stuck* if they do not hold, if it has no plan,
    or if the low-level state did not change since its last step (a blocked move). Stuck hands control
-   to the bridge at this same state (detection itself costs no env step).
+   to the bridge at this same state (detection itself costs no env step), remembering the stalled
+   operator's skill (the failure signature's first half, core/signatures.py).
 4. bridge turn: when its skill has finished, the bridge picks an applicable ground skill or CallPlanner
    (applicable once the state changed since the bridge took over; with the loop guard, a skill it
    already chose in this same state, which left it unchanged, is not). Evaluated only on steps where
@@ -48,7 +49,7 @@ def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.A
     state = env.reset(task)
     vec = env.state_vector(state)
     zero = jnp.int32(0)
-    return Episode(env_state=state, stuck_state=state, t=zero, horizon=jnp.int32(horizon),
+    return Episode(env_state=state, stuck_state=state, stalled_skill=jnp.int32(-1), t=zero, horizon=jnp.int32(horizon),
                    done=jnp.bool_(False), success=jnp.bool_(False),
                    control=jnp.int32(PLANNER if controls.planner else BRIDGE),
                    call=idle_call(), expected=jnp.zeros(num_words(env.num_atoms), jnp.uint32),
@@ -125,8 +126,10 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, plan: PlanLooku
     planning = live & (ep.control == PLANNER)
     repeated = planning & ep.planner_stepped & same_state(vec, ep.prev_vec)
     needs_op = planning & ~ep.call.running
-    can_continue = plan.found & (plan.op >= 0) & holds_all(ep.expected, atoms)
+    effects_hold = holds_all(ep.expected, atoms)
+    can_continue = plan.found & (plan.op >= 0) & effects_hold
     stuck = repeated | (needs_op & ~can_continue)
+    stalled_op = repeated | ~effects_hold  # its operator's skill stalled; else there was no plan
     start_op = needs_op & ~stuck
 
     op = jnp.maximum(plan.op, 0)
@@ -139,6 +142,7 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, plan: PlanLooku
         expected=jnp.where(start_op, plan.next_key, ep.expected),
         control=jnp.where(stuck, BRIDGE, ep.control),
         stuck_state=tree_where(stuck, state, ep.stuck_state),
+        stalled_skill=jnp.where(stuck, jnp.where(stalled_op, ep.call.skill, -1), ep.stalled_skill),
         bridge_vec=jnp.where(stuck, vec, ep.bridge_vec),
         table_misses=ep.table_misses + (plan.miss & needs_op),
         stuck_events=ep.stuck_events + stuck,
@@ -162,7 +166,7 @@ def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any
         skill_counts, no_ops = guard_loops(ep, vec, skill_counts, can_plan)
         op_ok = op_ok & ~no_ops[table.op_skill]
     num_ground = jnp.concatenate([skill_counts, can_plan[None].astype(jnp.int32)])
-    obs = BridgeObs(features=observation(env, controls, state, ep.stuck_state), num_ground=num_ground)
+    obs = BridgeObs(features=observation(env, controls, state, ep.stuck_state, ep.stalled_skill), num_ground=num_ground)
     choice = bridge(params, obs, key)
     skill = jnp.clip(choice.skill, 0, env.num_skills if controls.call_planner else env.num_skills - 1)
     op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)

@@ -34,6 +34,7 @@ class Approach:
     controls: Controls = Controls()
     description: str = ""
     algorithm: str = ""  # the low-level baselines' brax trainer ("ppo" or "sac")
+    per_signature: bool = False  # a Q-network of its own per failure signature (learn/signature_q.py)
 
     @property
     def learns(self) -> bool:
@@ -111,7 +112,19 @@ SELECTION = {a.name: a for a in (
              "ours with every object of the state as a token, attention choosing which matters; no hand-made selection"),
 )}
 
-KNOWN = {**APPROACHES, **LOW_LEVEL, **PLAN_REPAIR, **SELECTION}
+# The paper's second limitation (issue 54): where several kinds of novelty stall the planner, a bridge per
+# failure signature (the stalled operator's skill, the type of the object it stalled at), each fitted
+# only to its own signature's transitions, and one network that sees the signature beside ours' features.
+# Not among "all" (an env adds them to its defaults: Multi Novelty).
+SIGNATURE = {a.name: a for a in (
+    Approach("ours_per_signature", "ours, a bridge per signature", BridgeKind.Q, Controls(signature=True),
+             "ours with a Q-network of its own per failure signature (stalled operator's skill, object type)",
+             per_signature=True),
+    Approach("ours_signature_conditioned", "ours, signature-conditioned", BridgeKind.Q, Controls(signature=True),
+             "ours with one Q-network that sees the failure signature as one-hots beside the features"),
+)}
+
+KNOWN = {**APPROACHES, **LOW_LEVEL, **PLAN_REPAIR, **SELECTION, **SIGNATURE}
 
 
 def get_approach(name: str) -> Approach:

@@ -15,6 +15,7 @@ from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import Normalise, PolyakPer, TargetInit
 from jaxbridge.core.observations import token_position, token_width
+from jaxbridge.core.signatures import signature_shape
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.object_q import ObjectQNetwork
@@ -23,6 +24,7 @@ from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, b
                                       candidate_skills, encode_action, input_rows, input_size, task_state_split,
                                       with_input_rows)
 from jaxbridge.learn.replay import ReplayBuffer, add, init_buffer, sample_indices
+from jaxbridge.learn.signature_q import SignatureQNetwork
 from jaxbridge.learn.transitions import Transition, empty_transitions, for_buffer, successor_features
 
 
@@ -121,9 +123,16 @@ class DQN:
         return state.buffer.size
 
 
-def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork:
-    """The approach's Q-network: over its observation vector, or over object tokens (learned selection)."""
-    if not get_approach(config.approach).controls.observation.tokens:
+def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork | SignatureQNetwork:
+    """The approach's Q-network: over its observation vector, over object tokens (learned selection), or one
+    per failure signature."""
+    approach = get_approach(config.approach)
+    if approach.per_signature:
+        if config.normalise is not Normalise.NONE:
+            raise ValueError(f"approach {config.approach} does not scale its inputs: no normalise")
+        return SignatureQNetwork(signature_shape(env), env.num_skills + 2, config.hidden_sizes, config.activation,
+                                 config.output_init, ensemble=config.q_ensemble)
+    if not approach.controls.observation.tokens:
         return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
                         normalise=config.normalise is Normalise.MINMAX)
     if config.normalise is not Normalise.NONE:

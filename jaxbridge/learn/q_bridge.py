@@ -269,10 +269,10 @@ SPLIT_FROM_FEATURES = 32
 
 
 def candidates_input(env: NoveltyEnv, features: jax.Array, skill: jax.Array, param: jax.Array,
-                     task: TaskPart | None = None) -> jax.Array | SplitInput:
+                     task: TaskPart | None = None, split: bool = False) -> jax.Array | SplitInput:
     """The Q-network input for one observation `features` [F] (its varying entries, with `task`) and
-    candidates (skill, param) [C]."""
-    if task is not None or features.shape[-1] >= SPLIT_FROM_FEATURES:
+    candidates (skill, param) [C]; `split`: as a SplitInput whatever its width (a network that asks)."""
+    if split or task is not None or features.shape[-1] >= SPLIT_FROM_FEATURES:
         return SplitInput(features, encode_action(env, skill, param), task)
     return encode(env, features, skill, param)
 
@@ -312,7 +312,8 @@ def best_candidate(env: NoveltyEnv, net: QNetwork, q_params: Any, features: jax.
                    stratified: bool = True) -> tuple[BridgeAction, jax.Array]:
     """argmax over the applicable candidates of Q(features, skill, param); also returns the max Q."""
     params = sample_candidates(env, skills, key, stratified)
-    q = net.apply(q_params, candidates_input(env, features, jnp.asarray(skills), params, task))
+    split = getattr(net, "split_candidates", False)  # e.g. a network per failure signature: one per observation
+    q = net.apply(q_params, candidates_input(env, features, jnp.asarray(skills), params, task, split))
     q = jnp.where(num_ground[skills] > 0, q, -jnp.inf)
     best = jnp.argmax(q)
     return BridgeAction(skill=jnp.asarray(skills)[best], param=params[best]), q[best]
