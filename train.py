@@ -43,10 +43,11 @@ CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "learner", "num_
 DEFAULTS = jaxbridge.TrainConfig()
 
 
-def approach_list(text: str) -> list[str]:
-    """argparse type: "all" or a comma-separated list of approach names."""
+def approach_list(text: str) -> list[str] | str:
+    """argparse type: "all" (the env's: the paper's six and any other its default names) or a comma-separated
+    list of approach names."""
     if text.strip() == "all":
-        return list(jaxbridge.APPROACHES)
+        return "all"
     names = [n.strip() for n in text.split(",") if n.strip()]
     known = jaxbridge.ALL_APPROACHES
     if not names or any(n not in known for n in names):
@@ -83,9 +84,11 @@ def parse_args(argv):
                         "with horizon 100, Light Switch Door's fixed horizon 30 (default: the preset's, else the "
                         "env's first)")
     p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
-                   help="comma-separated approaches to train, or all (default: the paper's figure for the env: "
-                        f"the six, {', '.join(jaxbridge.APPROACHES)}; doorknobs: all but no_feature_selection, as the paper's "
-                        f"Doorknobs figure; by name only: {', '.join([*jaxbridge.SELECTION, *jaxbridge.PLAN_REPAIR, *jaxbridge.LOW_LEVEL])})")
+                   help="comma-separated approaches to train, or all (the six and what the env's default adds; default: "
+                        f"the paper's figure for the env: the six, {', '.join(jaxbridge.APPROACHES)}; doorknobs: all but "
+                        "no_feature_selection, as the paper's Doorknobs figure; multi_novelty: ours, the learned selector, the "
+                        "per-signature bridges and the baselines but Maple Q; by name only: "
+                        f"{', '.join([*jaxbridge.SELECTION, *jaxbridge.SIGNATURE, *jaxbridge.PLAN_REPAIR, *jaxbridge.LOW_LEVEL])})")
     p.add_argument("--learner", metavar="NAME", help="what fits the Q-function: dqn (double DQN, the paper's), pqn (no "
                    "replay or target network) or package.module:factory (checked first; docs/NEW_LEARNER.md); "
                    f"--help --learner NAME lists its settings below (default: {d.learner.name})")

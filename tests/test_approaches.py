@@ -13,7 +13,7 @@ from envs_jax.light_switch_door.env import LightSwitchDoor
 from envs_jax.precision import ExactKey
 from jaxbridge.core.bridges import PurePlanningBridge, RandomBridge
 from jaxbridge.core.episode import observation
-from jaxbridge.learn.approaches import (APPROACHES, KNOWN, LOW_LEVEL, PLAN_REPAIR, SELECTION, BridgeKind,
+from jaxbridge.learn.approaches import (APPROACHES, KNOWN, LOW_LEVEL, PLAN_REPAIR, SELECTION, SIGNATURE, BridgeKind,
                                        get_approach)
 from jaxbridge.learn.q_bridge import QBridge, encode
 from jaxbridge.core.config import TrainConfig
@@ -66,7 +66,7 @@ def cycle_program(approach: str, host_planner: bool = True) -> Counter:
 def test_approach_names_are_unique_and_each_resolves_to_itself():
     """A name or label given twice would silently replace an approach (the registries are dicts merged
     into KNOWN) or merge two runs' lines in the figures and tables, which tell approaches apart by label."""
-    entries = [(key, a) for group in (APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION) for key, a in group.items()]
+    entries = [(key, a) for group in (APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION, SIGNATURE) for key, a in group.items()]
     assert len(KNOWN) == len(entries) and all(key == a.name for key, a in entries)
     assert len({a.label for _, a in entries}) == len(entries)
     assert all(get_approach(name) is approach for name, approach in KNOWN.items())
@@ -101,24 +101,28 @@ def test_each_approach_builds_its_bridge_and_a_network_as_wide_as_what_its_bridg
 
 
 def test_the_command_line_and_every_env_name_only_registered_approaches():
-    """train.py's --approaches: `all` is the paper's six, every registered name is accepted alone and all
-    together, a name given twice or unknown is refused; each env's default figure names registered ones."""
+    """train.py's --approaches: `all` is the env's (the paper's six, then what its default adds), every
+    registered name is accepted alone and all together, a name given twice or unknown is refused; each env's
+    default figure names registered ones, the paper's envs only the six."""
     import argparse
     import importlib.util
 
-    from envs_jax import BUILTIN, VARIANTS, env_class
-    from jaxbridge.api.training import default_approaches
+    from envs_jax import BUILTIN, KNOBS, VARIANTS, WORLDS, env_class
+    from jaxbridge.api.training import all_approaches, default_approaches
     spec = importlib.util.spec_from_file_location("train_cli", ROOT / "train.py")
     train_py = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(train_py)
-    assert train_py.approach_list("all") == list(APPROACHES) and len(APPROACHES) == 6 and "ours" in APPROACHES
+    assert train_py.approach_list("all") == "all" and len(APPROACHES) == 6 and "ours" in APPROACHES
     assert all(train_py.approach_list(name) == [name] for name in KNOWN)
     assert train_py.approach_list(" , ".join(KNOWN)) == list(KNOWN)
     for text, message in (("ours,ours", "listed twice"), ("ours,clever", "unknown approach clever")):
         with pytest.raises(argparse.ArgumentTypeError, match=message):
             train_py.approach_list(text)
-    for env in BUILTIN + VARIANTS:
-        assert set(default_approaches(env_class(env))) <= set(APPROACHES), env
+    for env in BUILTIN + VARIANTS + KNOBS + WORLDS:
+        defaults, every = default_approaches(env_class(env)), all_approaches(env_class(env))
+        assert set(defaults) <= set(every) <= set(KNOWN) and every[:6] == list(APPROACHES), env
+        assert every == list(APPROACHES) or env in WORLDS, env
+    assert all_approaches(env_class("multi_novelty"))[6:] == ["ours_learned_selection", *SIGNATURE]
 
 
 def test_no_callplanner_never_hands_control_back(tests_batch):

@@ -111,6 +111,11 @@ class MultiNovelty(NoveltyEnv):
     test_tasks = staticmethod(tasks.test_tasks)
     test_protocols = tasks.TEST_PROTOCOLS
     task_sizes = {"cells": "cells in the row", "doors": "single-lock doors, two cells apart (the fuse is always blown)"}
+    # Issue 54's question: one bridge (ours, the learned selector) against a bridge per failure signature, with
+    # the baselines; Maple Q and the full state with --approaches all.
+    default_approaches = ("ours", "ours_learned_selection", "ours_per_signature", "ours_signature_conditioned",
+                          "no_callplanner", "random", "pure_planning")
+    why_not_all = "full-state networks, timed on their own"
     novelty_sweep = NoveltySweep("novelty instances (the fuse and single-lock doors)", f"in a row of {tasks.SWEEP_CELLS} cells",
                                  tasks.SWEEP_COUNTS, tasks.sweep_task, horizon=lambda spec: spec.horizon)
 

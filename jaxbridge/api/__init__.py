@@ -17,12 +17,12 @@ from jaxbridge.api.devices import local_devices
 from jaxbridge.api.envs import env_names, load_env, make_env, tasks
 from jaxbridge.api.policies import Bridges, Drawn, Episodes, HandMade, Policy, hand_made, load, side_by_side
 from jaxbridge.api.sweeps import SWEEP_TASKS, NoveltySweep, sweep_lines, sweep_novelties
-from jaxbridge.api.training import (Experiment, Training, default_approaches, make_train, prepare, prepare_resume,
+from jaxbridge.api.training import (Experiment, Training, all_approaches, default_approaches, make_train, prepare, prepare_resume,
                                     release_locks, resume, train)
 from jaxbridge.core.check_env import EnvContractError, check_env
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import PRESETS
-from jaxbridge.learn.approaches import APPROACHES, KNOWN as ALL_APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION
+from jaxbridge.learn.approaches import APPROACHES, KNOWN as ALL_APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION, SIGNATURE
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.learner import LearnerContractError, QLearner, check_learner
 from jaxbridge.learn.online import TrainOutput
@@ -34,8 +34,8 @@ from jaxbridge.utils.files import WriteError
 
 __all__ = ["ALL_APPROACHES", "APPROACHES", "Attention", "Bridges", "Drawn", "EnvContractError", "Episodes", "Experiment", "HandMade",
            "Hyper", "InputError", "LearnerContractError", "QLearner", "check_env", "check_learner",
-           "Interrupted", "LOW_LEVEL", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "Policy", "SWEEP_TASKS",
-           "TrainConfig", "TrainOutput", "Training", "WriteError", "default_approaches", "env_names", "hand_made",
+           "Interrupted", "LOW_LEVEL", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "SIGNATURE", "Policy", "SWEEP_TASKS",
+           "TrainConfig", "TrainOutput", "Training", "WriteError", "all_approaches", "default_approaches", "env_names", "hand_made",
            "load", "load_env", "local_devices", "make_config", "make_env", "make_train", "prepare", "prepare_resume",
            "release_locks",            "resume", "seed_keys", "settings_help", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",
            "train"]

@@ -161,7 +161,8 @@ def prepare(env: EnvLike | None = None, approaches: str | Sequence[str] | None =
         rundir.check_name(name)
     config = make_config(env, seeds, cycles, **overrides)
     env_cls = load_env(config.env)
-    names = default_approaches(env_cls) if approaches is None else _approach_list(approaches)
+    names = (default_approaches(env_cls) if approaches is None else all_approaches(env_cls) if approaches == "all"
+             else _approach_list(approaches))
     hyper_grid = _sweep_grid(sweep, config)
     with _refusing_setups(config):
         _check_memory(config, env_cls, names, hyper_grid, workers, max_memory)
@@ -240,6 +241,12 @@ def resume(run_dir: str | Path, progress: bool = False, **options) -> Experiment
 def default_approaches(env_cls) -> list[str]:
     """What train.py trains when no approaches are given: the paper's figure for the env."""
     return list(env_cls.default_approaches or APPROACHES)
+
+
+def all_approaches(env_cls) -> list[str]:
+    """What `approaches="all"` (train.py --approaches all) trains: the paper's six, then any other approach
+    the env's default names (Multi Novelty's selector and per-signature bridges)."""
+    return list(APPROACHES) + [a for a in default_approaches(env_cls) if a not in APPROACHES]
 
 
 def _approach_list(approaches: str | Sequence[str]) -> list[str]:
@@ -324,7 +331,7 @@ def _start_line(config: TrainConfig, env_cls, approaches: list[str], workers: in
 
     line = (f"{env_cls.name}: training {', '.join(get_approach(a).label for a in approaches)} x {config.num_seeds} "
             f"seeds x {config.cycles} cycles")
-    skipped = [a for a in APPROACHES if a not in approaches]
+    skipped = [a for a in all_approaches(env_cls) if a not in approaches]
     if approaches == default_approaches(env_cls) and skipped:
         line += f"; not {', '.join(get_approach(a).label for a in skipped)} ({env_cls.why_not_all}): --approaches all adds it"
     seconds = pace.estimate(env_cls.name, approaches, config.num_seeds * config.cycles, workers or default_workers(approaches))
