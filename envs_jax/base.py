@@ -164,6 +164,9 @@ class NoveltyEnv(abc.ABC):
     # and why the others are left out of it.
     default_approaches: ClassVar[tuple[str, ...] | None] = None
     why_not_all: ClassVar[str] = ""
+    # The failure signatures (stalled planner skill, object type) the env's novelties stall at: a bridge per
+    # signature has a network for each and one for every other (None: one for every pair; jaxbridge/core/signatures.py).
+    failure_signatures: ClassVar[tuple[tuple[str, str], ...] | None] = None
     # The sizes `sized_task` takes (name -> what it counts), e.g. {"cells": ..., "doors": ...}.
     task_sizes: ClassVar[dict[str, str]] = {}
     # The test-task distributions `test_tasks` draws (name -> what it is), the first the default; an env

@@ -12,7 +12,7 @@ from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.episode import Controls, observation_size
 from jaxbridge.core.meta_policy import rollout
 from jaxbridge.core.signatures import (num_signatures, planner_skills, signature_features, signature_index,
-                                       signature_shape, signature_width)
+                                       signature_members, signature_shape, signature_width)
 from jaxbridge.core.tasks import evaluation_specs, make_batch
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.q_bridge import QNetwork, SplitInput, encode_action
@@ -32,6 +32,8 @@ def test_signatures_are_the_planners_skills_by_the_object_types_each_with_none()
         assert one_hots.shape == (signature_width(env),) and one_hots.sum() == 2
         assert int(signature_index(jnp.asarray(one_hots), signature_shape(env))) == part * 6 + LIGHT_TYPE
     assert observation_size(env, Controls(signature=True)) == env.num_features + signature_width(env)
+    members = signature_members(env)  # the env declares its two: a network each, and one for the rest
+    assert members[0 * 6 + DOOR] == 0 and members[1 * 6 + LIGHT_TYPE] == 1 and sorted(set(members)) == [0, 1, 2]
     assert observation_size(env, Controls()) == env.num_features
 
 
@@ -71,7 +73,9 @@ def member_inputs(key, env, rows):
 
 def test_a_network_per_signature_is_its_members_and_each_learns_only_from_its_own_transitions():
     env = LightSwitchDoor.for_tasks([LightSwitchDoor.train_task(0)])
-    net = SignatureQNetwork(signature_shape(env), env.num_skills + 2, output_init="uniform")
+    members = signature_members(env)  # undeclared: a network per signature
+    assert members == tuple(range(num_signatures(env)))
+    net = SignatureQNetwork(signature_shape(env), members, env.num_skills + 2, output_init="uniform")
     whole, features, ids, action = member_inputs(jax.random.key(1), env, 12)
     variables = net.init(jax.random.key(0), whole[:1])
     members = variables["params"]["members"]

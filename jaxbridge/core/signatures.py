@@ -3,8 +3,9 @@
 The meta-policy knows the planner's step that stalled; the object is the paper's selection in the stuck
 state (the interactable object closest to the robot, `observations.closest_object`). A signature is the
 pair (the stalled operator's skill, that object's type), each part one of a static, env-given set plus
-"none" (no plan, so no operator; no interactable object): the per-signature bridges index their
-networks by it and the conditioned bridge sees it, as two one-hots after its features.
+"none" (no plan, so no operator; no interactable object). Both signature approaches see it as two
+one-hots after their features; the per-signature bridges pick their network by it: one per signature
+the env declares (`NoveltyEnv.failure_signatures`) and one for all others, or one per signature.
 """
 from __future__ import annotations
 
@@ -56,3 +57,15 @@ def signature_index(one_hots: jax.Array, shape: tuple[int, int]) -> jax.Array:
     """int32[...]: the signature id (skill part x types + type part) of `signature_features` [..., P + 1 + T + 1]."""
     skills, types = shape
     return (jnp.argmax(one_hots[..., :skills], -1) * types + jnp.argmax(one_hots[..., skills:], -1)).astype(jnp.int32)
+
+
+def signature_members(env: NoveltyEnv) -> tuple[int, ...]:
+    """The network of each signature id of a bridge per signature: the env's `failure_signatures` one each, in
+    their order, and every other signature the next one; without a declaration, every signature its own.
+    Static (a tuple), so the number of networks is too."""
+    if env.failure_signatures is None:
+        return tuple(range(num_signatures(env)))
+    skills, types = signature_shape(env)
+    known, kinds = planner_skills(env).tolist(), list(env.object_types)
+    declared = [known.index(env.skill_index(skill)) * types + kinds.index(kind) for skill, kind in env.failure_signatures]
+    return tuple(declared.index(i) if i in declared else len(declared) for i in range(skills * types))

@@ -15,7 +15,7 @@ from envs_jax.base import NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import Normalise, PolyakPer, TargetInit
 from jaxbridge.core.observations import token_position, token_width
-from jaxbridge.core.signatures import signature_shape
+from jaxbridge.core.signatures import signature_members, signature_shape
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.object_q import ObjectQNetwork
@@ -130,8 +130,8 @@ def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork
     if approach.per_signature:
         if config.normalise is not Normalise.NONE:
             raise ValueError(f"approach {config.approach} does not scale its inputs: no normalise")
-        return SignatureQNetwork(signature_shape(env), env.num_skills + 2, config.hidden_sizes, config.activation,
-                                 config.output_init, ensemble=config.q_ensemble)
+        return SignatureQNetwork(signature_shape(env), signature_members(env), env.num_skills + 2, config.hidden_sizes,
+                                 config.activation, config.output_init, ensemble=config.q_ensemble)
     if not approach.controls.observation.tokens:
         return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
                         normalise=config.normalise is Normalise.MINMAX)

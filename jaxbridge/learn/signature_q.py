@@ -3,13 +3,13 @@ skill, type of the object it stalled at), the RAPid-Learn-style answer to the pa
 
 The observation ends with the signature's two one-hots (`core/signatures.signature_features`); they
 pick the member, which sees the rest of the observation and the action, as ours' network does. The
-members are one stacked parameter pytree indexed by the signature id (their number is static: the env's
-planner skills x object types, each with "none"), so a seed's networks are one array per layer, and a
-minibatch's gradient reaches each member only through its own signature's transitions.
+members are one stacked parameter pytree indexed by the member id (their number is static: one per
+signature the env declares and one for the rest, `core/signatures.signature_members`), so a seed's
+networks are one array per layer, and a minibatch's gradient reaches each member only through its own
+signature's transitions.
 """
 from __future__ import annotations
 
-import math
 from typing import Sequence
 
 import flax.linen as nn
@@ -23,10 +23,11 @@ from jaxbridge.learn.q_bridge import QNetwork, SplitInput
 class SignatureQNetwork(nn.Module):
     """Q(features ++ signature one-hots, skill, param) = member[signature](features, skill, param), each
     member a QNetwork (its ensemble, if any, inside it). Takes QNetwork's inputs: a whole input [..., F + S
-    + A] or a SplitInput, whose action's leading axes start with the observation's (one observation and
-    its candidates, or one action per observation)."""
+    + A] or a SplitInput, whose action's leading axes are the observation's, or none (one observation and
+    its candidates, as the greedy argmax gives them: then only its member runs)."""
 
     shape: tuple[int, int]  # (stalled skills, object types), each with "none": core/signatures.signature_shape
+    members: tuple[int, ...]  # the member of each signature id: core/signatures.signature_members
     action_width: int  # one-hot over the skills and CallPlanner, and the parameter
     hidden_sizes: Sequence[int] = (32, 32)
     activation: str = "leaky_relu"
@@ -45,24 +46,19 @@ class SignatureQNetwork(nn.Module):
         observation, action = (x.observation, x.action) if isinstance(x, SplitInput) else (
             x[..., :-self.action_width], x[..., -self.action_width:])
         width = sum(self.shape)
-        features, index = observation[..., :-width], signature_index(observation[..., -width:], self.shape)
+        features = observation[..., :-width]
+        index = jnp.asarray(self.members, jnp.int32)[signature_index(observation[..., -width:], self.shape)]
         member = self.member()
         sample = SplitInput(jnp.zeros(features.shape[-1]), jnp.zeros(self.action_width))
-        count = self.shape[0] * self.shape[1]
         stacked = self.param("members", lambda key: jax.vmap(lambda k: member.init(k, sample)["params"])(
-            jax.random.split(key, count)))
+            jax.random.split(key, max(self.members) + 1)))
 
-        def q(params, features, action):  # one observation (and its candidates) with its member
-            return member.apply({"params": params}, SplitInput(features, action), members)
-
-        lead = index.shape
-        if not lead:
-            return q(jax.tree.map(lambda p: p[index], stacked), features, action)
-        rows = math.prod(lead)
-        action = jnp.broadcast_to(action, lead + action.shape[len(lead):])
-        flat = lambda a: a.reshape((rows,) + a.shape[len(lead):])
-        values = jax.vmap(q)(jax.tree.map(lambda p: p[flat(index)], stacked), flat(features), flat(action))
-        if members:  # [rows, ensemble, ...] -> [ensemble, *lead, ...]
-            values = jnp.moveaxis(values, 1, 0)
-            return values.reshape(values.shape[:1] + lead + values.shape[2:])
-        return values.reshape(lead + values.shape[1:])
+        q = lambda params, x: member.apply({"params": params}, x, members)
+        if not index.shape:  # one observation: its member alone, its first layer's share once for the candidates
+            return q(jax.tree.map(lambda p: p[index], stacked), SplitInput(features, action))
+        # A batch of observations (a minibatch, relabelling's targets): every member on every row, each row
+        # then takes its own member's value, so no other member's parameters get a gradient from it. Dense
+        # products of the few members cost less than gathering a member's parameters per row.
+        whole = jnp.concatenate([features, jnp.broadcast_to(action, features.shape[:-1] + action.shape[-1:])], -1)
+        values = jax.vmap(q, in_axes=(0, None))(stacked, whole)  # [members, (ensemble,) *lead]
+        return jnp.take_along_axis(values, jnp.broadcast_to(index, values.shape[1:])[None], axis=0)[0]
