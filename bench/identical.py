@@ -17,9 +17,9 @@ from pathlib import Path
 from bench.ab import checked_out
 from bench.records import run_child
 
-# Every approach kind: the paper's six, plan repair, selection, and the low-level baselines' plain pair.
+# Every approach kind: the paper's six, plan repair, selection, signatures, and the low-level baselines' plain pair.
 EVERY = ("ours,no_feature_selection,no_callplanner,random,pure_planning,maple_q,plan_progress,plan_progress_replan,"
-         "ours_closest_object,ours_learned_selection,low_level_ppo,low_level_sac")
+         "ours_closest_object,ours_learned_selection,ours_per_signature,ours_signature_conditioned,low_level_ppo,low_level_sac")
 
 
 def first_difference(a: str, b: str) -> str:
