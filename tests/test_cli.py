@@ -241,6 +241,9 @@ def test_train_runs_the_papers_figure_by_default_and_says_what_it_leaves_out(tmp
     assert default_approaches(env_class("coffee")) == ["ours", "no_feature_selection", "no_callplanner", "random",
                                                        "pure_planning", "maple_q"]
     assert "not " not in start_line(TrainConfig.for_env("coffee"), env_class("coffee"), ["ours"], None)
+    multi = env_class("multi_novelty")  # its default: the question's approaches, the full-state ones with `all`
+    mine = start_line(TrainConfig.for_env("multi_novelty"), multi, default_approaches(multi), None)
+    assert "a bridge per signature" in mine and "not no feature selection, Maple Q (pure RL)" in mine
     assert "no time estimate until this machine has trained each of them once" in line
 
 
