@@ -56,6 +56,9 @@ def test_load_evaluates_and_renders_a_trained_run_from_python(quickstart, tmp_pa
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(ValueError, match="unknown approach"):
         jaxbridge.train("light_switch_door", approaches="ourz", seeds=1, cycles=1)
+    listed = jaxbridge.prepare("light_switch_door", approaches="ours, random", seeds=1, cycles=1, out=tmp_path / "listed")
+    assert "training ours, random bridge x 1 seeds" in listed.describe()
+    listed.release()
 
 
 def test_train_without_out_returns_the_same_numbers_and_leaves_no_files(quickstart, tmp_path, monkeypatch):

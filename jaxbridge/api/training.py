@@ -214,9 +214,9 @@ def train(env: EnvLike | None = None, approaches: str | Sequence[str] | None = "
     """Train approaches on an env as train.py does and return their metrics as arrays.
 
     `env`: a registered name, `package.module:Class` or a NoveltyEnv subclass (default light_switch_door);
-    `approaches`: a name or names (jaxbridge/learn/approaches.py: ours, no_callplanner, maple_q, ...; None:
-    the paper's figure for the env, as train.py); `seeds`: a count from 0 or consecutive seeds; `cycles`:
-    default the preset's (100). `sweep`: {field: values}, every approach at every setting (the cartesian
+    `approaches`: a name, names or a comma-separated string (jaxbridge/learn/approaches.py: ours,
+    no_callplanner, maple_q, ...; None: the paper's figure for the env, as train.py); `seeds`: a count from
+    0 or consecutive seeds; `cycles`: default the preset's (100). `sweep`: {field: values}, every approach at every setting (the cartesian
     product), each its own run named approach@field=value. Other keywords: any TrainConfig field
     (`help(TrainConfig)`), e.g. `preset="authors"`, `updates_per_cycle=500`, and train.py's run options
     `workers`, `devices`, `max_memory` (GiB), `tensorboard`. With `out`, the experiment directory
@@ -250,8 +250,9 @@ def all_approaches(env_cls) -> list[str]:
 
 
 def _approach_list(approaches: str | Sequence[str]) -> list[str]:
-    """The approaches by name, each known, none twice."""
-    names = [approaches] if isinstance(approaches, str) else list(approaches)
+    """The approaches by name (a name, names, or a comma-separated string as train.py takes), each known, none
+    twice."""
+    names = [n.strip() for n in approaches.split(",")] if isinstance(approaches, str) else list(approaches)
     for approach in names:
         with refusing("approaches"):
             get_approach(approach)
