@@ -1,10 +1,8 @@
-import importlib.util
 import os
-from pathlib import Path
 
 import pytest
 
-from run_helpers import TEST_XLA_FLAGS
+from run_helpers import TEST_XLA_FLAGS, script_main
 
 # Tests share compiled programs across processes through JAX's persistent cache, the many small ones too
 # (a child train.py finds an earlier one's programs of the same shapes; faster reruns).
@@ -21,10 +19,7 @@ os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {TEST_XLA_FLAGS}".
 @pytest.fixture(scope="module")
 def eval_main():
     """eval.py's main(argv), in this process (programs compiled by one call serve the next)."""
-    spec = importlib.util.spec_from_file_location("eval_cli", Path(__file__).resolve().parents[1] / "eval.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.main
+    return script_main("eval.py")
 
 
 # The costliest test files first, by their seconds on a fresh clone (`python -m pytest --durations=0`):

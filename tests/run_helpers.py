@@ -1,4 +1,5 @@
 """Running train.py in a child process, and what the safety and fault tests assert of its errors."""
+import functools
 import os
 import select
 import subprocess
@@ -21,23 +22,17 @@ def cli_in_process(script: str, *args) -> subprocess.CompletedProcess:
     code and what it printed, without a new interpreter's start-up (seconds each). For input refused
     before training starts; a training's threads, locks and signals belong in a child process."""
     import contextlib
-    import importlib.util
     import io
     import signal
 
     import jaxbridge
     from jaxbridge.utils.cli import run_main
 
-    if script not in _MAINS:
-        spec = importlib.util.spec_from_file_location(f"cli_{Path(script).stem}", ROOT / script)
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        _MAINS[script] = module.main
     out, err, handler, argv = io.StringIO(), io.StringIO(), signal.getsignal(signal.SIGINT), sys.argv
     with contextlib.chdir(ROOT), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         try:
             sys.argv = [script, *args]  # argparse names the program by it
-            code = run_main(_MAINS[script], list(args))
+            code = run_main(script_main(script), list(args))
         except SystemExit as exit_:  # argparse's refusals
             code = exit_.code
         finally:
@@ -47,7 +42,15 @@ def cli_in_process(script: str, *args) -> subprocess.CompletedProcess:
     return subprocess.CompletedProcess([script, *args], code, out.getvalue(), err.getvalue())
 
 
-_MAINS: dict = {}
+@functools.cache
+def script_main(script: str):
+    """The `main(argv)` of a script of the repository root (train.py, eval.py), loaded once per process."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(f"cli_{Path(script).stem}", ROOT / script)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.main
 
 
 def one_line_error(proc, code: int, *words: str) -> None:
