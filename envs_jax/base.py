@@ -118,7 +118,7 @@ def tree_where(cond: jax.Array, a: Any, b: Any) -> Any:
 
 def stack_trees(trees: list[Any]) -> Any:
     """Stack pytrees of numpy/jax leaves on a new leading axis (device arrays)."""
-    return jax.tree.map(lambda *xs: jnp.asarray(np.stack(xs)), *trees)
+    return jax.tree.map(lambda *xs: jax.device_put(np.stack(xs)), *trees)
 
 
 class TaskSpec(Protocol, Hashable):

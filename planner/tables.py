@@ -162,7 +162,7 @@ def stack_tables(tasks: list[CompiledTask]) -> PlanTable:
             op_pre=_pad(t.op_pre, o, 0), op_skill=_pad(t.op_skill, o, 0), op_slot=_pad(t.op_slot, o, 0),
             op_valid=_pad(t.op_valid, o, False))
 
-    return jax.tree.map(lambda *xs: jnp.asarray(np.stack(xs)), *[padded(t) for t in tables])
+    return jax.tree.map(lambda *xs: jax.device_put(np.stack(xs)), *[padded(t) for t in tables])
 
 
 def table_lookup(table: PlanTable, key: jax.Array) -> PlanLookup:

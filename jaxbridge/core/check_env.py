@@ -138,7 +138,7 @@ def _check_planner(env: NoveltyEnv, spec: Any) -> None:
 def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
     """Shapes, dtypes and purity of every device function, on one task and on a batch of two."""
     name = type(env).__name__
-    tasks = jax.tree.map(lambda *xs: jnp.asarray(np.stack(xs)), *task_arrays)
+    tasks = jax.tree.map(lambda *xs: jax.device_put(np.stack(xs)), *task_arrays)
     task = jax.tree.map(lambda x: x[0], tasks)
     state = _calls(f"{name}.reset", jax.jit(env.reset), task)
     _traced_alike(f"{name}.reset", env.reset, task)

@@ -58,8 +58,9 @@ def bridge_params(learning: QLearner, params: Any, eps: jax.Array, n: int) -> QB
 
 
 def _by_seed(tree, seeds: int):
-    """Seed-major batch [seeds * n, ...] -> [seeds, n, ...]."""
-    return jax.tree.map(lambda x: jnp.reshape(x, (seeds, -1) + x.shape[1:]), tree)
+    """Seed-major batch [seeds * n, ...] -> [seeds, n, ...], in host memory (an eager reshape of a device
+    array compiles a program per leaf shape)."""
+    return jax.tree.map(lambda x: np.reshape(np.asarray(x), (seeds, -1) + x.shape[1:]), tree)
 
 
 def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
@@ -137,7 +138,7 @@ class Cycle:
         assert (self.seeds.num_seeds, self.seeds.block) == (slots, config.seed_block)
         tasks = _by_seed((setup.train.arrays, setup.test.arrays), config.num_seeds)
         if len(settings) > 1:  # every setting trains and tests on the seeds' tasks
-            tasks = jax.tree.map(lambda x: jnp.concatenate([x] * len(settings)), tasks)
+            tasks = jax.tree.map(lambda x: np.concatenate([x] * len(settings)), tasks)
         hypers = jax.tree.map(lambda *v: np.repeat(np.stack(v), config.num_seeds), *map(Hyper.of, settings))
         self._inputs = self.seeds.place((*tasks, hypers))
         self._real = self.seeds.real()
