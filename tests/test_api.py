@@ -41,21 +41,18 @@ def rows(text: str) -> list[dict]:
     return list(csv.DictReader(io.StringIO(text)))
 
 
-def test_make_train_is_train_py_as_one_jitted_function(cli_metrics):
-    out = jax.jit(jaxbridge.make_train(CONFIG))()
-    assert rows(as_csv(out.metrics)) == rows(cli_metrics["0.001"])  # the same per-seed program: the same numbers
-    assert out.learners.updates.tolist() == [10 * 20] * 4
-
-
-def test_one_vmapped_train_over_two_learning_rates_gives_each_rates_train_py_numbers(cli_metrics):
+def test_make_train_is_train_py_as_one_jitted_function_and_vmaps_over_hyperparameters(cli_metrics):
+    # One jitted function of the whole run, vmapped over two learning rates (one compile serves both
+    # checks): each rate's runs are the plain run's program, so each gives train.py's numbers at that rate.
     train = jaxbridge.make_train(CONFIG)
     hypers = jax.tree.map(lambda *v: jnp.stack(v), *(jaxbridge.Hyper.of(dataclasses.replace(CONFIG, learning_rate=float(r)))
                                                       for r in RATES))
     out = jax.jit(jax.vmap(train, in_axes=(None, 0)))(None, hypers)
     for i, rate in enumerate(RATES):
         mine, theirs = rows(as_csv(jax.tree.map(lambda x: x[i], out.metrics))), rows(cli_metrics[rate])
-        assert mine == theirs  # the vmapped runs go one after another, each the plain run's program
+        assert mine == theirs
     assert rows(cli_metrics["0.001"]) != rows(cli_metrics["0.0003"])  # the two rates learn differently
+    assert out.learners.updates.tolist() == [[10 * 20] * 4] * 2
 
 
 def test_docs_api_md_documents_every_public_name_and_help_explains_the_calls():
