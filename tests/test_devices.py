@@ -16,6 +16,7 @@ from jaxbridge.run import checkpoint
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh, device_count_arg
 from jaxbridge.learn.setup import make_setup
+from run_helpers import with_fusion_emitters
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ["--num-seeds", "3", "--cycles", "3", "--updates-per-cycle", "20", "--checkpoint-every", "1",
@@ -24,12 +25,12 @@ SHORT = ["--num-seeds", "3", "--cycles", "3", "--updates-per-cycle", "20", "--ch
 
 def train(*args, env=None):
     return subprocess.run([sys.executable, "train.py", *args], cwd=ROOT, capture_output=True, text=True,
-                          timeout=600, env=env)
+                          timeout=600, env=env or with_fusion_emitters())
 
 
 def start(*args):
     return subprocess.Popen([sys.executable, "train.py", *args], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, env=with_fusion_emitters())
 
 
 def exact(run_dir: Path):
@@ -72,7 +73,7 @@ def test_two_devices_give_the_metrics_and_parameters_of_one(runs):
 def test_a_run_widened_onto_a_second_device_mid_run_gives_the_numbers_of_one(runs, tmp_path):
     # What the experiment's scheduler does when a worker frees its device (run/scheduling.py).
     proc = subprocess.run([sys.executable, str(ROOT / "tests" / "widened_train.py"), str(tmp_path)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=600)
+                          capture_output=True, text=True, timeout=600, env=with_fusion_emitters())
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["2", "True"]  # asked after cycles 1 and 2, not after the last
     assert json.loads((tmp_path / "ours" / "summary.json").read_text())["devices"] == "2 cpu"

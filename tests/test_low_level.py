@@ -49,13 +49,13 @@ def test_the_adapter_meets_brax_expectations_under_its_training_wrappers(env_nam
     assert view.observation_size == env.num_features
     low, high = env.action_bounds()
     assert low.shape == high.shape == (env.action_dim,) and np.all(low < high)
-    state = jax.jit(view.reset)(jax.random.PRNGKey(0))
+    state = jax.eval_shape(view.reset, jax.random.PRNGKey(0))  # its shapes; its values under the wrappers below
     chex.assert_shape(state.obs, (view.observation_size,))
     chex.assert_shape([state.reward, state.done], ())
-    assert not state.done  # the training task's planner gets stuck before its goal
     # brax's own wrappers (vmap, episode length, auto-reset) step it on a batch
     wrapped = wrap(view, episode_length=100)
     batch = jax.jit(wrapped.reset)(jax.random.split(jax.random.PRNGKey(1), 3))
+    assert not batch.done.any()  # the training task's planner gets stuck before its goal
     stepped = jax.jit(wrapped.step)(batch, jnp.zeros((3, view.action_size)))
     chex.assert_shape(stepped.obs, (3, view.observation_size))
     chex.assert_shape([stepped.reward, stepped.done], (3,))
