@@ -86,29 +86,23 @@ def test_a_pqn_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test
     assert step == 3 and np.mean(result.success) == pytest.approx(np.mean(last))
 
 
-def test_the_example_learner_trains_from_the_command_line_and_its_checkpoint_evaluates(tmp_path):
+def test_the_example_learner_trains_from_the_command_line_sweeps_its_own_settings_and_its_checkpoint_evaluates(tmp_path):
+    # One run: its own settings set (memory: 3 cycles, all of a 3-cycle run) and swept (epochs: its
+    # default 50, and 7), each setting its own run directory.
     learner = "examples.monte_carlo_q:make_learner"
     proc = train_cli("--env", "examples.locked_box:LockedBox", "--approaches", "ours", "--learner", learner,
-                     "--num-seeds", "2", "--cycles", "3", "--no-progress", "--out", str(tmp_path))
+                     "--num-seeds", "2", "--cycles", "3", "--set", "memory=3", "--sweep", "epochs=50,7",
+                     "--no-progress", "--out", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
-    run = tmp_path / "locked_box" / "ours"
-    assert json.loads((run / "config.json").read_text())["learner"]["name"] == learner  # what --resume and eval.py load
+    for epochs in (50, 7):
+        saved = json.loads((tmp_path / "locked_box" / f"ours@epochs={epochs}" / "config.json").read_text())["learner"]
+        assert (saved["name"], saved["epochs"], saved["memory"]) == (learner, epochs, 3)  # what --resume and eval.py load
+    run = tmp_path / "locked_box" / "ours@epochs=50"
     rates = {c: np.mean([float(r["test_solve_rate"]) for r in csv.DictReader((run / "metrics.csv").open())
                          if r["cycle"] == c]) for c in ("1", "3")}
     assert rates["1"] <= 0.3 and rates["3"] >= 0.8, rates  # it learned the key (a random bridge: about 0.1)
     _, step, _, result, _ = evaluate_run(run)
     assert step == 3 and np.mean(result.success) == pytest.approx(rates["3"])
-
-
-def test_the_example_learners_own_settings_sweep_and_are_set_from_the_command_line(tmp_path):
-    learner = "examples.monte_carlo_q:make_learner"
-    proc = train_cli("--env", "examples.locked_box:LockedBox", "--approaches", "ours", "--learner", learner,
-                     "--num-seeds", "1", "--cycles", "2", "--episodes-per-cycle", "2", "--set", "memory=3",
-                     "--sweep", "epochs=2,7", "--no-progress", "--out", str(tmp_path))
-    assert proc.returncode == 0, proc.stderr
-    for epochs in (2, 7):
-        saved = json.loads((tmp_path / "locked_box" / f"ours@epochs={epochs}" / "config.json").read_text())["learner"]
-        assert (saved["name"], saved["epochs"], saved["memory"]) == (learner, epochs, 3)
     refused = cli_in_process("train.py", "--env", "examples.locked_box:LockedBox", "--learner", learner, "--set", "memory=0",
                              "--out", str(tmp_path / "refused"))
     assert refused.returncode == 2 and "memory must be at least 1" in refused.stderr
