@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from bench.sweep import print_digits, sweep_parser, swept_config, train_seeds
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.learn.q_bridge import encode
 
 
@@ -22,8 +22,8 @@ def greedy_test_rollout(setup, learners, num_seeds: int, num_tests: int):
     greedy = setup.episode_params(learners, owner, jnp.zeros(len(owner), jnp.float32))
     keys = jax.random.split(jax.random.key(123), len(owner))
     env = setup.test_env
-    return rollout(env, setup.bridge(env), greedy, setup.test.arrays, keys, setup.test.max_steps, record=True,
-                   controls=setup.controls)
+    return rollout(MetaPolicy(env, setup.bridge(env), greedy, setup.controls), setup.test.arrays, keys,
+                   setup.test.max_steps, record=True)
 
 
 def main() -> None:

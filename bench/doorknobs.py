@@ -43,7 +43,7 @@ def measure(repeats: int) -> dict:
     from envs_jax.base import SkillCall
     from envs_jax.doorknobs.env import Doorknobs
     from jaxbridge.core.bridges import make_bridge
-    from jaxbridge.core.meta_policy import rollout
+    from jaxbridge.core.meta_policy import MetaPolicy, rollout
     from jaxbridge.core.tasks import evaluation_batch
 
     batch = evaluation_batch(Doorknobs, list(range(8)))
@@ -74,7 +74,7 @@ def measure(repeats: int) -> dict:
 
     oracle = make_bridge("oracle", env)
     keys = jax.random.split(jax.random.key(0), size)
-    run_oracle = lambda: rollout(env, oracle, None, batch.arrays, keys, STEPS)[0]
+    run_oracle = lambda: rollout(MetaPolicy(env, oracle), batch.arrays, keys, STEPS)[0]
     result = run_oracle()
     times = [best_ms_per_step(fn, repeats) for fn in (run_oracle, scanned(action), scanned(initiable))]
     return {"ms": dict(zip(FIGURES, times)), "solved": int(result.success.sum()), "episodes": size,

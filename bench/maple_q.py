@@ -33,7 +33,7 @@ import numpy as np
 from bench.records import DIRTY_RECORDS, RECORDS, ROOT, check_clean, git_commit, machine, shown
 from bench.update_parts import measure as update_parts
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.learn.devices import SeedMesh, select_devices
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.learner import epsilon
@@ -65,8 +65,8 @@ def cycle_parts(setup: Setup, learner) -> dict[str, Callable]:
     @jax.jit
     def train_rollout(learner):
         explore = bridge_params(learning, learning.greedy(learner), epsilon(hyper, learner.decisions), episodes)
-        return rollout(setup.train_env, setup.bridge(setup.train_env), explore, train, keys(episodes),
-                       config.train_steps, record=True, controls=controls, shared_params=shared, host_planner=False)
+        policy = MetaPolicy(setup.train_env, setup.bridge(setup.train_env), explore, controls, shared_params=shared)
+        return rollout(policy, train, keys(episodes), config.train_steps, record=True, host_planner=False)
 
     @jax.jit
     def observe(learner, result, records):
@@ -78,9 +78,8 @@ def cycle_parts(setup: Setup, learner) -> dict[str, Callable]:
     @jax.jit
     def test_rollout(learner):
         greedy = bridge_params(learning, learning.greedy(learner), jnp.float32(0.0), config.num_test_tasks)
-        return rollout(setup.test_env, setup.bridge(setup.test_env), greedy, test,
-                       keys(config.num_test_tasks), setup.test.max_steps, controls=controls, shared_params=shared,
-                       host_planner=False)[0]
+        policy = MetaPolicy(setup.test_env, setup.bridge(setup.test_env), greedy, controls, shared_params=shared)
+        return rollout(policy, test, keys(config.num_test_tasks), setup.test.max_steps, host_planner=False)[0]
 
     learn = jax.jit(lambda learner: learning.learn(hyper, learner, jnp.int32(1), train.tasks))
     seed_cycle = jax.jit(make_seed_cycle(setup, host_planner=False))

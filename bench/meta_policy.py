@@ -15,7 +15,7 @@ import jax
 
 from envs_jax import env_class, registered
 from jaxbridge.core.bridges import make_bridge
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import evaluation_batch
 
 
@@ -23,7 +23,7 @@ def measure(batch, repeats: int) -> dict:
     bridge = make_bridge("oracle", batch.env)
 
     def once(i):
-        result, _ = rollout(batch.env, bridge, None, batch.arrays,
+        result, _ = rollout(MetaPolicy(batch.env, bridge), batch.arrays,
                             jax.random.split(jax.random.key(i), batch.size), batch.max_steps)
         return jax.block_until_ready(result)
 

@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxbridge.core.bridges import make_bridge
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 
 
 def oracle_and_pure_planning(batch) -> dict:
@@ -17,7 +17,7 @@ def oracle_and_pure_planning(batch) -> dict:
 
     twice = lambda tree: jax.tree.map(lambda x: jnp.concatenate([x, x]), tree)
     use_oracle = jnp.arange(2 * batch.size) < batch.size
-    result, _ = rollout(batch.env, either, use_oracle, twice(batch.arrays),
+    result, _ = rollout(MetaPolicy(batch.env, either, use_oracle), twice(batch.arrays),
                         jax.random.split(jax.random.key(0), 2 * batch.size), batch.max_steps)
     result = jax.tree.map(np.asarray, result)
     return {"oracle": jax.tree.map(lambda x: x[: batch.size], result),

@@ -17,7 +17,7 @@ from jaxbridge.learn.approaches import (APPROACHES, KNOWN, LOW_LEVEL, PLAN_REPAI
                                        get_approach)
 from jaxbridge.learn.q_bridge import QBridge, encode
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, rollout
+from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, MetaPolicy, rollout
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.core.tasks import evaluation_batch
@@ -34,8 +34,8 @@ def tests_batch():
 def random_rollout(batch, controls, seed=0):
     """The random bridge picks CallPlanner whenever it is applicable, so it shows what `controls` allow."""
     keys = jax.random.split(jax.random.key(seed), batch.size)
-    result, records = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
-                              keys, batch.max_steps, record=True, controls=controls)
+    result, records = rollout(MetaPolicy(batch.env, RandomBridge(batch.env), None, controls), batch.arrays, keys,
+                              batch.max_steps, record=True)
     return jax.tree.map(np.asarray, result), jax.tree.map(np.asarray, records)
 
 
@@ -165,7 +165,7 @@ def test_non_learning_approaches_never_evaluate_a_q_network(approach):
 def test_pure_planning_replans_whenever_stuck_and_solves_nothing(tests_batch):
     from jaxbridge.core.bridges import PurePlanningBridge
     keys = jax.random.split(jax.random.key(0), tests_batch.size)
-    result, records = rollout(tests_batch.env, PurePlanningBridge(tests_batch.env), None, tests_batch.arrays,
+    result, records = rollout(MetaPolicy(tests_batch.env, PurePlanningBridge(tests_batch.env)), tests_batch.arrays,
                               keys, tests_batch.max_steps, record=True)
     result, records = jax.tree.map(np.asarray, (result, records))
     assert not result.success.any()

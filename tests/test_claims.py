@@ -14,9 +14,10 @@ import jax
 import numpy as np
 import pytest
 
+from envs_jax.base import BridgeObs
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import make_batch
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.q_bridge import best_candidate, candidate_skills, encode
@@ -83,9 +84,8 @@ def stuck_decision(setup: Setup):
     env_cls, seeds = setup.env_cls, setup.config.seeds
     batch = make_batch(env_cls, [env_cls.train_task(s) for s in seeds], seeds,
                        horizons=[setup.config.train_steps] * len(seeds), env=setup.train_env)
-    _, rec = rollout(batch.env, make_bridge("oracle", batch.env), None, batch.arrays,
-                     jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True,
-                     controls=setup.controls)
+    _, rec = rollout(MetaPolicy(batch.env, make_bridge("oracle", batch.env), None, setup.controls), batch.arrays,
+                     jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True)
     first = np.argmax(np.asarray(rec.decided & rec.live), axis=0)
     pick = lambda x: np.asarray(x)[first, np.arange(batch.size)]
     return pick(rec.features), pick(rec.num_ground), pick(rec.skill), pick(rec.param)
@@ -103,7 +103,7 @@ def test_learning_raises_the_q_of_the_oracles_fix_at_the_stuck_state_and_makes_i
     for i in range(SEEDS):
         before, after = (jax.tree.map(lambda x: x[i], run.learners[c].online) for c in (0, -1))
         fix = lambda q: float(setup.learner.net.apply(q, encode(env_obj, features[i], skill[i], param[i])))
-        greedy, _ = best_candidate(env_obj, setup.learner.net, after, features[i], num_ground[i], candidates,
-                                   jax.random.key(i))
+        greedy, _ = best_candidate(env_obj, setup.learner.net, after, BridgeObs(features[i], num_ground[i]),
+                                   candidates, jax.random.key(i))
         assert fix(after) >= fix(before) + 0.01, (i, fix(before), fix(after))
         assert int(greedy.skill) == skill[i] and abs(float(greedy.param) - param[i]) <= 0.1, (i, greedy, param[i])

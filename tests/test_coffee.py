@@ -13,7 +13,7 @@ from envs_jax.coffee import world
 from envs_jax.base import SkillCall
 from envs_jax.coffee.env import CUP_ATOMS, SINGLE_ATOMS, Coffee
 from envs_jax.coffee.world import CoffeeTask
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import evaluation_batch, make_batch
 from planner.strips import ground
 
@@ -377,7 +377,7 @@ def test_the_oracle_twists_in_fewer_wrist_steps_than_any_fixed_twist_and_solves_
     runs = 1 + len(FIXED_TWISTS)
     fixed = jnp.repeat(jnp.array((jnp.nan,) + FIXED_TWISTS, jnp.float32), batch.size)
     arrays = jax.tree.map(lambda x: jnp.concatenate([x] * runs), batch.arrays)
-    result, rec = rollout(batch.env, FixedTwistOracle(batch.env), fixed, arrays,
+    result, rec = rollout(MetaPolicy(batch.env, FixedTwistOracle(batch.env), fixed), arrays,
                           jax.random.split(jax.random.key(0), runs * batch.size), batch.max_steps, record=True)
     rot, live = np.asarray(rec.env_state.jug_rot), np.asarray(rec.live)
     wrist_steps = ((rot[1:] != rot[:-1]) & live[:-1]).sum(0).reshape(runs, batch.size)
@@ -436,8 +436,9 @@ def training_batch():
 
 def hesitant_rollout(batch, quirk: bool, groups):
     env = batch.env.with_quirks(("shared_repeat_flag",) if quirk else ())
-    result, rec = rollout(env, HesitantOracle(env), None, batch.arrays, jax.random.split(jax.random.key(1), batch.size),
-                          batch.max_steps, record=True, groups=groups)
+    result, rec = rollout(MetaPolicy(env, HesitantOracle(env)), batch.arrays,
+                          jax.random.split(jax.random.key(1), batch.size), batch.max_steps, record=True,
+                          groups=groups)
     decided = np.asarray(rec.decided & rec.live)
     first = np.array([np.asarray(rec.skill)[decided[:, i], i][0] for i in range(batch.size)])
     return jax.tree.map(np.asarray, result), first == skills.PICK_JUG, np.asarray(rec.env_state.memory.repeated[-1])

@@ -10,7 +10,7 @@ from envs_jax import Coffee, CoffeeDistractor, LightSwitchDoor
 from envs_jax.coffee.distractor import with_decoy
 from envs_jax.light_switch_door.env import LightSwitchDoorTask
 from jaxbridge.core.observations import closest_object, closest_object_features, closest_object_width
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import make_batch
 
 
@@ -44,8 +44,8 @@ def test_where_the_planner_gets_stuck_the_closest_object_is_the_jug_unless_a_cup
     paper's rule picks the jug in Coffee, the decoy cup in Coffee Distractor."""
     batch = make_batch(cls, [cls.train_task(s) for s in range(8)], list(range(8)), [cls.train_steps] * 8)
     env = batch.env
-    result, records = rollout(env, env.oracle_bridge, None, batch.arrays, jax.random.split(jax.random.key(0), 8),
-                              batch.max_steps, record=True)
+    result, records = rollout(MetaPolicy(env, env.oracle_bridge), batch.arrays,
+                              jax.random.split(jax.random.key(0), 8), batch.max_steps, record=True)
     assert np.asarray(result.success).all()
     stuck = np.asarray(records.stuck & records.live)
     chosen = np.asarray(jax.vmap(jax.vmap(lambda s: closest_object(env.objects(s))[0]))(records.env_state))[stuck]

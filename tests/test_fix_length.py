@@ -14,7 +14,7 @@ from envs_jax.base import BridgeObs, SkillCall
 from envs_jax.light_switch_door import sequence as lss
 from envs_jax.light_switch_door.sequence import LightSwitchSequence, LightSwitchSequenceTask, dial_target
 from jaxbridge.core.bridges import make_bridge
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import make_batch
 from jaxbridge.run.sweep import sweep_tasks
 
@@ -191,7 +191,7 @@ def episodes():
     sweep, _ = sweep_tasks(LightSwitchSequence, 2, sweep_seed=3)
     batch = make_batch(LightSwitchSequence, specs + sweep, owners + [0] * len(sweep))
     result = oracle_and_pure_planning(batch)
-    random, _ = rollout(batch.env, make_bridge("random", batch.env), None, batch.arrays,
+    random, _ = rollout(MetaPolicy(batch.env, make_bridge("random", batch.env)), batch.arrays,
                         jax.random.split(jax.random.key(1), batch.size), batch.max_steps)
     result["random"] = jax.tree.map(np.asarray, random)
     result["dials"] = np.array([s.dials for s in batch.specs])

@@ -15,7 +15,7 @@ from bench.low_level import main as low_level_table
 
 from envs_jax import env_class
 from envs_jax.base import BridgeAction, BridgeObs
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import evaluation_batch, make_batch
 from jaxbridge.learn.brax_env import BridgeEnv, low_level_controls, scaled_choice
 from jaxbridge.learn.low_level import PolicyBridge, _networks
@@ -129,15 +129,15 @@ class LowLevelOracle:
 def test_the_meta_policy_with_a_low_level_bridge_applies_its_raw_actions_on_the_test_tasks():
     batch = evaluation_batch(env_class("light_switch_door"), [0], 10)
     keys = jax.random.split(jax.random.key(0), batch.size)
-    result, records = rollout(batch.env, LowLevelOracle(batch.env), None, batch.arrays, keys, batch.max_steps,
-                              record=True, controls=low_level_controls(call_planner=True))
+    oracle = lambda call_planner: MetaPolicy(batch.env, LowLevelOracle(batch.env), None,
+                                             low_level_controls(call_planner=call_planner))
+    result, records = rollout(oracle(True), batch.arrays, keys, batch.max_steps, record=True)
     assert np.asarray(result.success).all()
     # the bridge decides at every step it controls (no skill runs on): one decision per bridge step
     decided, bridge = np.asarray(records.decided), (np.asarray(records.actor) == 1) & np.asarray(records.live)
     assert decided[bridge].all() and np.asarray(result.bridge_decisions).sum() == decided.sum()
     # the same bridge without CallPlanner fixes the first door and is then stuck with the light off
-    result, _ = rollout(batch.env, LowLevelOracle(batch.env), None, batch.arrays, keys, batch.max_steps,
-                        controls=low_level_controls(call_planner=False))
+    result, _ = rollout(oracle(False), batch.arrays, keys, batch.max_steps)
     assert not np.asarray(result.success).any()
 
 

@@ -12,7 +12,7 @@ from envs_jax.light_switch_door import env as lsd
 from envs_jax.light_switch_door.env import LightSwitchDoor
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Controls, hashed_choice,
-                                       rollout, same_state)
+                                       MetaPolicy, rollout, same_state)
 from jaxbridge.core.tasks import make_batch, evaluation_batch
 from planner.tables import compile_task, stack_tables
 
@@ -27,8 +27,8 @@ def batch():
 def run(batch, bridge_name, seed=0, record=False, tables=None, controls=Controls()):
     bridge = make_bridge(bridge_name, batch.env)
     arrays = batch.arrays if tables is None else batch.arrays.replace(tables=tables)
-    result, records = rollout(batch.env, bridge, None, arrays, jax.random.split(jax.random.key(seed), batch.size),
-                              batch.max_steps, record=record, controls=controls)
+    result, records = rollout(MetaPolicy(batch.env, bridge, None, controls), arrays,
+                              jax.random.split(jax.random.key(seed), batch.size), batch.max_steps, record=record)
     return jax.tree.map(np.asarray, result), (None if records is None else jax.tree.map(np.asarray, records))
 
 

@@ -13,7 +13,7 @@ from envs_jax import env_class, is_builtin
 from envs_jax.multi_novelty.env import FETCH, FUSE, LIFT, PUSH, MultiNovelty
 from envs_jax.multi_novelty.tasks import BOTH, KEYCARD, LATCHED, MultiNoveltyTask, task_of
 from jaxbridge.core.bridges import make_bridge
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.observations import closest_object
 from jaxbridge.core.tasks import evaluation_specs, make_batch
 from jaxbridge.run.sweep import sweep_tasks
@@ -179,7 +179,7 @@ def episodes():
     specs += sweep
     batch = make_batch(MultiNovelty, specs, [0] * len(specs))
     result = oracle_and_pure_planning(batch)
-    random, _ = rollout(batch.env, make_bridge("random", batch.env), None, batch.arrays,
+    random, _ = rollout(MetaPolicy(batch.env, make_bridge("random", batch.env)), batch.arrays,
                         jax.random.split(jax.random.key(1), batch.size), batch.max_steps)
     result["random"] = jax.tree.map(np.asarray, random)
     result.update(groups=groups, kinds=np.array(kinds), h=np.array([s.shortest_solution for s in specs]))
@@ -216,7 +216,7 @@ def test_the_closest_object_rule_picks_the_door_where_the_fix_fetches_its_card()
     held_out, _ = evaluation_specs(MultiNovelty, list(SEEDS[:4]), 10, "held_out")
     batch = make_batch(MultiNovelty, specs + held_out, [0] * (len(specs) + len(held_out)))
     env = batch.env
-    _, records = rollout(env, make_bridge("oracle", env), None, batch.arrays,
+    _, records = rollout(MetaPolicy(env, make_bridge("oracle", env)), batch.arrays,
                          jax.random.split(jax.random.key(2), batch.size), batch.max_steps, record=True)
     states = jax.tree.map(lambda x: x[np.asarray(records.stuck & records.live)], records.env_state)
     features = np.asarray(jax.vmap(lambda s: env.features(s, s))(states))

@@ -16,7 +16,7 @@ from envs_jax.base import BridgeAction
 from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchDoorTask, LightSwitchPanel
 from jaxbridge import check_env
 from jaxbridge.core.check_env import OracleBridge
-from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_PLANNER, rollout
+from jaxbridge.core.meta_policy import ACTOR_BRIDGE, ACTOR_PLANNER, MetaPolicy, rollout
 from jaxbridge.core.tasks import make_batch
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.approaches import get_approach
@@ -47,8 +47,8 @@ def episodes():
     env = batch.env
     out = {}
     for name in ("plan_progress", "plan_progress_replan"):
-        result, rec = rollout(env, KeysThenMove(env), None, batch.arrays, jax.random.split(jax.random.key(3), 4),
-                              batch.max_steps, record=True, controls=get_approach(name).controls)
+        result, rec = rollout(MetaPolicy(env, KeysThenMove(env), None, get_approach(name).controls), batch.arrays,
+                              jax.random.split(jax.random.key(3), 4), batch.max_steps, record=True)
         out[name] = jax.tree.map(np.asarray, (result, rec))
     return env, out
 
@@ -111,8 +111,8 @@ def test_the_panel_variant_keeps_the_env_contract_and_its_keys_turn_only_on_the_
 def test_on_the_panel_variant_plan_progress_hands_back_past_the_door_and_ours_at_the_panel():
     batch = make_batch(LightSwitchPanel, [PANEL_TASK] * 4, [0] * 4)
     env, keys = batch.env, jax.random.split(jax.random.key(5), 4)
-    runs = {name: jax.tree.map(np.asarray, rollout(env, bridge, None, batch.arrays, keys, batch.max_steps, record=True,
-                                                   controls=get_approach(name).controls))
+    runs = {name: jax.tree.map(np.asarray, rollout(MetaPolicy(env, bridge, None, get_approach(name).controls),
+                                                   batch.arrays, keys, batch.max_steps, record=True))
             for name, bridge in (("plan_progress", KeysThenMove(env)), ("ours", OracleBridge(env)))}
     result, rec = runs["ours"]
     assert result.success.all() and not rec.progressed.any()

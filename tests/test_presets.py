@@ -54,9 +54,9 @@ def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_gua
 
     original_rollout = online.rollout
 
-    def recording_rollout(*args, controls, **kwargs):
-        seen.append(controls)
-        return original_rollout(*args, controls=controls, **kwargs)
+    def recording_rollout(policy, *args, **kwargs):
+        seen.append(policy.controls)
+        return original_rollout(policy, *args, **kwargs)
 
     monkeypatch.setattr(online, "rollout", recording_rollout)
     setup = make_setup(TrainConfig.for_env("doorknobs", num_seeds=1, loop_guard=loop_guard))

@@ -10,7 +10,7 @@ from envs_jax.light_switch_door.env import LightSwitchDoor
 from envs_jax.multi_novelty.env import FUSE, LIGHT, MOVE, MultiNovelty
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.episode import Controls, observation_size
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.signatures import (num_signatures, planner_skills, signature_features, signature_index,
                                        signature_members, signature_shape, signature_width)
 from jaxbridge.core.tasks import evaluation_specs, make_batch
@@ -45,8 +45,8 @@ def test_the_bridge_sees_the_stalled_operator_and_the_object_of_each_stall():
     specs, _ = evaluation_specs(MultiNovelty, [0, 1], 4, "held_out")
     batch = make_batch(MultiNovelty, specs, [0] * len(specs))
     env = batch.env
-    _, records = rollout(env, make_bridge("oracle", env), None, batch.arrays, jax.random.split(jax.random.key(0), batch.size),
-                         batch.max_steps, record=True, controls=Controls(signature=True))
+    _, records = rollout(MetaPolicy(env, make_bridge("oracle", env), None, Controls(signature=True)), batch.arrays,
+                         jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True)
     decided = np.asarray(records.decided & records.live)
     features = np.asarray(records.features)[decided]
     ids = np.asarray(signature_index(jnp.asarray(features[:, env.num_features:]), signature_shape(env)))

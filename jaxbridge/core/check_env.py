@@ -19,7 +19,7 @@ import numpy as np
 
 from envs_jax.base import POSITION_DIM, NoveltyEnv, SkillCall, SkillSpec
 from jaxbridge.core.bridges import OracleBridge, RandomBridge
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import evaluation_batch, make_batch
 from planner.strips import Domain, Problem
 from planner.tables import compile_task, pack_atoms
@@ -255,7 +255,7 @@ def _same(where: str, *values: Any) -> None:
 def _check_oracle(cls: type[NoveltyEnv], seed: int, num_test_tasks: int) -> None:
     batch = evaluation_batch(cls, [seed], num_test_tasks)
     where = f"{cls.__name__}.oracle_bridge"
-    result, records = _calls(where, lambda: rollout(batch.env, OracleBridge(batch.env), None, batch.arrays,
+    result, records = _calls(where, lambda: rollout(MetaPolicy(batch.env, OracleBridge(batch.env)), batch.arrays,
                                                     jax.random.split(jax.random.key(seed), batch.size),
                                                     batch.max_steps, record=True))
     solved = np.asarray(result.success)
@@ -284,7 +284,7 @@ def _check_filled(cls: type[NoveltyEnv], spec: Any, seed: int) -> None:
     if filled.size == env.full_state_size:
         return
     batch = make_batch(cls, [spec] * 4, [seed] * 4)
-    _, records = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
+    _, records = rollout(MetaPolicy(batch.env, RandomBridge(batch.env)), batch.arrays,
                          jax.random.split(jax.random.key(seed), batch.size), batch.max_steps, record=True)
     states = np.asarray(jax.jit(jax.vmap(jax.vmap(batch.env.full_state)))(records.env_state))
     _expect_filled(name, filled, states * np.asarray(records.live)[..., None], "random bridges' episodes")

@@ -152,11 +152,26 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, plan: PlanLooku
     return ep, decide
 
 
-def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any, ep: Episode,
-                table: PlanTable, atoms: jax.Array, key: jax.Array, choice_bits: jax.Array) -> Decision:
+@struct.dataclass
+class MetaPolicy:
+    """Algorithm 1's players on one env: the planner, acting through each episode's plan table, and the bridge
+    policy `bridge` with its `params` (None, or a pytree with a leading episode axis; with `shared_params`,
+    one pytree every episode uses: one network whose layers multiply all episodes at once). `controls`
+    picks the approach's parts of the meta-policy. Only `params` is traced."""
+
+    env: NoveltyEnv = struct.field(pytree_node=False)
+    bridge: Bridge = struct.field(pytree_node=False)
+    params: Any = None
+    controls: Controls = struct.field(pytree_node=False, default=Controls())
+    shared_params: bool = struct.field(pytree_node=False, default=False)
+
+
+def bridge_turn(policy: MetaPolicy, ep: Episode, table: PlanTable, atoms: jax.Array, key: jax.Array,
+                choice_bits: jax.Array) -> Decision:
     """The bridge observes, chooses a skill and parameter, and the choice is grounded uniformly at
     random among the applicable ground operators of that skill (the Q-function does not see objects).
     CallPlanner is applicable once the state changed since the bridge took over (and never without it)."""
+    env, controls = policy.env, policy.controls
     state = ep.env_state
     vec = env.state_vector(state)
     op_ok = applicable_ops(env, table, atoms, state)
@@ -167,7 +182,7 @@ def bridge_turn(env: NoveltyEnv, controls: Controls, bridge: Bridge, params: Any
         op_ok = op_ok & ~no_ops[table.op_skill]
     num_ground = jnp.concatenate([skill_counts, can_plan[None].astype(jnp.int32)])
     obs = BridgeObs(features=observation(env, controls, state, ep.stuck_state, ep.stalled_skill), num_ground=num_ground)
-    choice = bridge(params, obs, key)
+    choice = policy.bridge(policy.params, obs, key)
     skill = jnp.clip(choice.skill, 0, env.num_skills if controls.call_planner else env.num_skills - 1)
     op = hashed_choice(op_ok & (table.op_skill == skill), choice_bits)
     action = choice.action if controls.low_level else jnp.zeros(env.action_dim, jnp.float32)
@@ -320,10 +335,10 @@ def planner_step(env: NoveltyEnv, controls: Controls, tables: PlanTable, episode
     return PlannerTurn(episodes, packed, decide, episodes.stuck_events > stuck_before, progressed)
 
 
-def bridge_step(env: NoveltyEnv, controls: Controls, bridge: Bridge, bridge_params: Any, tables: PlanTable,
-                turn: PlannerTurn, choice_bits: jax.Array, bridge_keys: jax.Array, groups: jax.Array,
-                shared_params: bool = False) -> tuple[Episode, StepRecord]:
+def bridge_step(policy: MetaPolicy, tables: PlanTable, turn: PlannerTurn, choice_bits: jax.Array,
+                bridge_keys: jax.Array, groups: jax.Array) -> tuple[Episode, StepRecord]:
     """Steps 4-5 on a batch: the bridge's turn where it must choose, then one env step."""
+    env, controls = policy.env, policy.controls
     episodes, num_episodes = turn.episodes, turn.decide.shape[0]
     no_decision = Decision(skill=jnp.zeros(num_episodes, jnp.int32), slot=jnp.zeros(num_episodes, jnp.int32),
                            param=jnp.zeros(num_episodes, jnp.float32),
@@ -333,30 +348,28 @@ def bridge_step(env: NoveltyEnv, controls: Controls, bridge: Bridge, bridge_para
                            action=jnp.zeros((num_episodes, env.action_dim), jnp.float32))
     decision = jax.lax.cond(  # the bridge only runs on steps where some episode must choose
         jnp.any(turn.decide),
-        lambda: jax.vmap(partial(bridge_turn, env, controls, bridge), in_axes=(None if shared_params else 0,) + (0,) * 5)(
-            bridge_params, episodes, tables, turn.atoms, bridge_keys, choice_bits),
+        lambda: jax.vmap(bridge_turn, in_axes=(None if policy.shared_params else 0,) + (0,) * 5)(
+            policy, episodes, tables, turn.atoms, bridge_keys, choice_bits),
         lambda: no_decision)
     episodes, rec = jax.vmap(partial(execute, env, low_level=controls.low_level))(episodes, turn.decide, decision,
                                                                                   turn.stuck, turn.progressed)
     return episodes.replace(env_state=env.share_between_episodes(episodes.env_state, groups)), rec
 
 
-@partial(jax.jit, static_argnames=("env", "bridge", "max_steps", "record", "controls", "shared_params", "host_planner"))
-def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArrays, keys: jax.Array,
-            max_steps: int, record: bool = False, controls: Controls = Controls(), shared_params: bool = False,
+@partial(jax.jit, static_argnames=("max_steps", "record", "host_planner"))
+def rollout(policy: MetaPolicy, batch: TaskArrays, keys: jax.Array, max_steps: int, record: bool = False,
             groups: jax.Array | None = None, host_planner: bool = True):
     """Run the meta-policy on a batch of B episodes for at most `max_steps` env steps.
 
-    `batch` (the episodes' tasks, plan tables and horizons), keys (one per episode) and bridge_params (None,
-    or a pytree) carry a leading batch axis B; with `shared_params`, bridge_params has none and every
-    episode uses it (one network: its layers multiply all episodes at once, not one matrix per episode).
-    `controls` picks the approach's parts of the meta-policy. `groups` (int[B], default: one group) says
+    `batch` (the episodes' tasks, plan tables and horizons) and keys (one per episode) carry a leading batch
+    axis B, as `policy.params` does unless shared. `groups` (int[B], default: one group) says
     which episodes run concurrently in one world, for what an env shares between them
     (`share_between_episodes`: one seed's episodes of a cycle phase). Without `host_planner`, a state
     missing from a plan table is not planned on the host (the episode finds no plan); it is only counted
     in `table_misses`, and the results are then not the meta-policy's (learn/online.Cycle reruns them).
     Returns EpisodeResult[B] and, with `record`, StepRecord[max_steps, B].
     """
+    env, controls = policy.env, policy.controls
     tasks, tables, horizons = batch.tasks, batch.tables, batch.horizons
     num_episodes = horizons.shape[0]
     groups = jnp.zeros(num_episodes, jnp.int32) if groups is None else groups
@@ -366,8 +379,7 @@ def rollout(env: NoveltyEnv, bridge: Bridge, bridge_params: Any, batch: TaskArra
     def step(episodes: Episode, randomness):
         param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]
         turn = planner_step(env, controls, tables, episodes, param_uniforms, host_planner)
-        episodes, rec = bridge_step(env, controls, bridge, bridge_params, tables, turn, choice_bits, bridge_keys,
-                                    groups, shared_params)
+        episodes, rec = bridge_step(policy, tables, turn, choice_bits, bridge_keys, groups)
         return episodes, (rec if record else None)
 
     randomness = step_randomness(keys, max_steps)

@@ -22,7 +22,7 @@ import jax
 import jax.numpy as jnp
 
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv
-from jaxbridge.core.meta_policy import (Controls, PlannerTurn, bridge_step, observation, observation_size,
+from jaxbridge.core.meta_policy import (Controls, MetaPolicy, PlannerTurn, bridge_step, observation, observation_size,
                                         planner_step, start_episode, step_randomness)
 from jaxbridge.core.observations import FEATURES, FULL_STATE
 from jaxbridge.core.tasks import TaskArrays
@@ -73,7 +73,7 @@ def _advance(env: NoveltyEnv, controls: Controls, tables, turn: PlannerTurn, key
     def one(turn: PlannerTurn, i, params) -> PlannerTurn:
         uniforms, bits, keys = step_randomness(jax.random.fold_in(key, i)[None], 1)
         params = jnp.zeros((1, agent_action_size(env, controls.call_planner))) if params is None else params[None]
-        episodes, _ = bridge_step(env, controls, bridge, params, tables, turn, bits[0], keys[0], groups)
+        episodes, _ = bridge_step(MetaPolicy(env, bridge, params, controls), tables, turn, bits[0], keys[0], groups)
         return planner_step(env, controls, tables, episodes, uniforms[0], host_planner=False)
 
     if bridge_params is not None:

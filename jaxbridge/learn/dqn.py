@@ -11,7 +11,7 @@ import numpy as np
 import optax
 from flax import struct
 
-from envs_jax.base import NoveltyEnv
+from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import Normalise, PolyakPer, TargetInit
 from jaxbridge.core.observations import token_position, token_width
@@ -195,9 +195,8 @@ def td_targets(dqn: DQN, hyper: Hyper, params: Any, target_params: Any, batch: T
     skills = candidate_skills(env, config.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
     stratified = config.param_samples is ParamSamples.STRATIFIED
-    best, _ = jax.vmap(lambda f, g, k, i: best_candidate(env, net, params, f, g, skills, k, at_task(task, i),
-                                                         stratified))(
-        batch.next_features, batch.next_num_ground, keys, batch.task)
+    best, _ = jax.vmap(lambda obs, k, i: best_candidate(env, net, params, obs, skills, k, at_task(task, i), stratified))(
+        BridgeObs(batch.next_features, batch.next_num_ground), keys, batch.task)
     next_q = net.apply(target_params, batch_input(env, batch.next_features, best.skill, best.param,
                                                   at_task(task, batch.task)))
     if config.clip_bootstrap:

@@ -19,7 +19,7 @@ import jax
 import jax.numpy as jnp
 
 from envs_jax.base import BridgeAction, BridgeObs, NoveltyEnv
-from jaxbridge.core.meta_policy import Controls, observation_size, rollout
+from jaxbridge.core.meta_policy import Controls, MetaPolicy, observation_size, rollout
 from jaxbridge.core.tasks import TaskArrays
 from jaxbridge.learn.brax_env import BridgeEnv, agent_action_size, scaled_choice
 
@@ -133,5 +133,5 @@ def policy_bridge(env: NoveltyEnv, approach) -> tuple[PolicyBridge, Controls]:
 def evaluate(env: NoveltyEnv, approach, params, arrays: TaskArrays, keys: jax.Array, max_steps: int):
     """EpisodeResult of the greedy low-level policy on `arrays`' episodes (planner until stuck, then it)."""
     bridge, controls = policy_bridge(env, approach)
-    result, _ = rollout(env, bridge, params, arrays, keys, max_steps, controls=controls, shared_params=True)
+    result, _ = rollout(MetaPolicy(env, bridge, params, controls, shared_params=True), arrays, keys, max_steps)
     return result

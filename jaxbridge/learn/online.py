@@ -17,7 +17,7 @@ import numpy as np
 from flax import struct
 
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.meta_policy import rollout
+from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import TaskArrays
 from jaxbridge.learn.approaches import BridgeKind
 from jaxbridge.learn.devices import SeedMesh
@@ -84,8 +84,8 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
         eps = epsilon(hyper, learner.decisions)
         explore = bridge_params(learning, learning.greedy(learner), eps, episodes)
-        result, records = rollout(train_env, train_bridge, explore, train_tasks, jax.random.split(k_train, episodes),
-                                  config.train_steps, record=approach.learns, controls=controls, shared_params=shared,
+        result, records = rollout(MetaPolicy(train_env, train_bridge, explore, controls, shared), train_tasks,
+                                  jax.random.split(k_train, episodes), config.train_steps, record=approach.learns,
                                   host_planner=host_planner)
         decisions = result.bridge_decisions.sum()
 
@@ -107,8 +107,8 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
 
         # 4. Greedy evaluation on the seed's test tasks.
         greedy = bridge_params(learning, learning.greedy(learner), jnp.float32(0.0), num_tests)
-        tested, _ = rollout(test_env, test_bridge, greedy, test_tasks, jax.random.split(k_test, num_tests),
-                            test.max_steps, controls=controls, shared_params=shared, host_planner=host_planner)
+        tested, _ = rollout(MetaPolicy(test_env, test_bridge, greedy, controls, shared), test_tasks,
+                            jax.random.split(k_test, num_tests), test.max_steps, host_planner=host_planner)
 
         metrics = CycleMetrics(
             test_solve_rate=tested.success.mean(), train_success_rate=result.success.mean(),

@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import optax
 from flax import struct
 
-from envs_jax.base import NoveltyEnv
+from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import Normalise, PQNSettings, learner_settings
 from jaxbridge.learn.dqn import q_network
@@ -77,8 +77,8 @@ class PQN:
         skills = candidate_skills(env, config.learner.n_target_sample)
         stratified = config.param_samples is ParamSamples.STRATIFIED
         keys = jax.random.split(key, valid.size).reshape(valid.shape)
-        best_q = lambda f, g, k: best_candidate(env, self.net, params, f, g, skills, k, stratified=stratified)[1]
-        next_q = jax.vmap(jax.vmap(best_q))(batch.next_features, batch.next_num_ground, keys)
+        best_q = lambda obs, k: best_candidate(env, self.net, params, obs, skills, k, stratified=stratified)[1]
+        next_q = jax.vmap(jax.vmap(best_q))(BridgeObs(batch.next_features, batch.next_num_ground), keys)
         next_q = jnp.where(jnp.isfinite(next_q), next_q, 0.0)  # -inf: nothing applicable (only after `done`)
         if config.learner.clip_bootstrap:
             next_q = jnp.clip(next_q, 0.0, 1.0 + hyper.call_planner_bonus)

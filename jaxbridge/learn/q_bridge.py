@@ -307,14 +307,13 @@ def sample_candidates(env: NoveltyEnv, skills: np.ndarray, key: jax.Array, strat
     return jnp.where(is_env_skill, env.param_from_uniform(np.minimum(skills, env.num_skills - 1), u), 0.0)
 
 
-def best_candidate(env: NoveltyEnv, net: QNetwork, q_params: Any, features: jax.Array, num_ground: jax.Array,
-                   skills: np.ndarray, key: jax.Array, task: TaskPart | None = None,
-                   stratified: bool = True) -> tuple[BridgeAction, jax.Array]:
-    """argmax over the applicable candidates of Q(features, skill, param); also returns the max Q."""
+def best_candidate(env: NoveltyEnv, net: QNetwork, q_params: Any, obs: BridgeObs, skills: np.ndarray, key: jax.Array,
+                   task: TaskPart | None = None, stratified: bool = True) -> tuple[BridgeAction, jax.Array]:
+    """argmax over the candidates applicable in `obs` of Q(features, skill, param); also returns the max Q."""
     params = sample_candidates(env, skills, key, stratified)
     split = getattr(net, "split_candidates", False)  # e.g. a network per failure signature: one per observation
-    q = net.apply(q_params, candidates_input(env, features, jnp.asarray(skills), params, task, split))
-    q = jnp.where(num_ground[skills] > 0, q, -jnp.inf)
+    q = net.apply(q_params, candidates_input(env, obs.features, jnp.asarray(skills), params, task, split))
+    q = jnp.where(obs.num_ground[skills] > 0, q, -jnp.inf)
     best = jnp.argmax(q)
     return BridgeAction(skill=jnp.asarray(skills)[best], param=params[best]), q[best]
 
@@ -339,8 +338,7 @@ class QBridge:
     def __call__(self, params: QBridgeParams, obs: BridgeObs, key: jax.Array) -> BridgeAction:
         k_explore, k_random, k_greedy = jax.random.split(key, 3)
         skills = candidate_skills(self.env, self.n_sample)
-        greedy, _ = best_candidate(self.env, self.net, params.q, obs.features, obs.num_ground, skills, k_greedy,
-                                   stratified=self.stratified)
+        greedy, _ = best_candidate(self.env, self.net, params.q, obs, skills, k_greedy, stratified=self.stratified)
         explore = jax.random.uniform(k_explore) < params.epsilon
         random = RandomBridge(self.env, self.explore_ground_operators)(None, obs, k_random)
         return tree_where(explore, random, greedy)

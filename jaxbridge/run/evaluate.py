@@ -12,7 +12,7 @@ import numpy as np
 
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.meta_policy import Controls, EpisodeResult, rollout
+from jaxbridge.core.meta_policy import Controls, EpisodeResult, MetaPolicy, rollout
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.learn.approaches import Approach
 from jaxbridge.learn.setup import Setup
@@ -38,8 +38,9 @@ def batch_rollout(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: in
                   controls: Controls = Controls(), record: bool = False):
     """`rollout` of every task in the batch (bridge_params: None or batched over tasks), each episode's key
     drawn from `seed` as every evaluation draws it; (EpisodeResult, StepRecord or None)."""
-    return rollout(batch.env, bridge, bridge_params, batch.arrays, jax.random.split(jax.random.key(seed), batch.size),
-                   batch.max_steps, record=record, controls=controls, groups=jnp.asarray(batch.seeds, jnp.int32))
+    return rollout(MetaPolicy(batch.env, bridge, bridge_params, controls), batch.arrays,
+                   jax.random.split(jax.random.key(seed), batch.size), batch.max_steps, record=record,
+                   groups=jnp.asarray(batch.seeds, jnp.int32))
 
 
 def run_bridge(batch: TaskBatch, bridge: Bridge, bridge_params=None, seed: int = 0,

@@ -23,7 +23,7 @@ from matplotlib.lines import Line2D
 from envs_jax.base import NoveltyEnv
 from envs_jax.drawing import Drawer, EpisodeTrace, attention_marks, draw_path, moment
 from jaxbridge.core.bridges import Bridge
-from jaxbridge.core.meta_policy import Controls, EpisodeResult, rollout
+from jaxbridge.core.meta_policy import Controls, EpisodeResult, MetaPolicy, rollout
 from jaxbridge.core.tasks import TaskBatch
 from jaxbridge.learn.object_q import slot_weights
 from jaxbridge.viz.episodes import bridge_choices
@@ -38,12 +38,12 @@ def drawer_for(env: NoveltyEnv) -> Drawer:
 
 
 # ---- recording ---------------------------------------------------------------------------------
-@partial(jax.jit, static_argnames=("env", "bridge", "drawer", "max_steps", "controls"))
-def _recorded_rollout(env, bridge, drawer, params, batch, keys, max_steps, controls, groups):
+@partial(jax.jit, static_argnames=("drawer", "max_steps"))
+def _recorded_rollout(policy: MetaPolicy, drawer: Drawer, batch, keys, max_steps: int, groups):
     """rollout(record=True), keeping of each recorded state only its snapshot and details (XLA then drops
     the rest), and of each step the ground skill it ran."""
-    result, records = rollout(env, bridge, params, batch, keys, max_steps, record=True, controls=controls,
-                              groups=groups)
+    env, controls = policy.env, policy.controls
+    result, records = rollout(policy, batch, keys, max_steps, record=True, groups=groups)
     per_state = lambda state: (*drawer.snapshot(env, state), drawer.details(env, state))
     xy, door_open, details = jax.vmap(jax.vmap(per_state))(records.env_state)  # [T, B, ...]
     per_step = (records.actor, records.skill, records.slot, records.param, records.decided)
@@ -69,8 +69,9 @@ def trace_episodes(batch: TaskBatch, bridge: Bridge, bridge_params, indices, see
     # its first max_steps steps do not depend on how many are drawn (partitionable threefry); the check
     # against `expected` below would catch it if they did.
     result, (actor, skill, slot, param, decided), (xy, door_open, details), seen = jax.tree.map(
-        np.asarray, _recorded_rollout(batch.env, bridge, drawer_for(batch.env), params, take(batch.arrays), keys,
-                                      batch.max_steps + 1, controls, jnp.asarray(batch.seeds[idx], jnp.int32)))
+        np.asarray, _recorded_rollout(MetaPolicy(batch.env, bridge, params, controls), drawer_for(batch.env),
+                                      take(batch.arrays), keys, batch.max_steps + 1,
+                                      jnp.asarray(batch.seeds[idx], jnp.int32)))
     if expected is not None:
         for field in ("success", "steps", "planner_calls", "bridge_decisions", "stuck_events"):
             if not np.array_equal(getattr(result, field), np.asarray(getattr(expected, field))[idx]):
