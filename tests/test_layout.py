@@ -107,3 +107,68 @@ def test_no_setting_is_compared_as_text_outside_where_it_is_resolved():
             if isinstance(node, ast.Compare) and (setting := compared_to_text(node, settings)):
                 found.append(f"{name}:{node.lineno} compares {setting} with text")
     assert not found, found
+
+
+# A function is read in one screen: in api/ and run/ (the rooms a reader walks through from train.py and
+# eval.py) none passes 50 lines. And a function's parameters are what a reader holds in mind at a call: past 8,
+# those that travel together become one value that says what they are (core/meta_policy.MetaPolicy). The
+# public API's functions and classes (jaxbridge.__all__) are exempt: their keyword options are the user's interface.
+MAX_FUNCTION_LINES, LONG_FUNCTION_ROOMS, MAX_PARAMETERS = 50, ("jaxbridge.api", "jaxbridge.run"), 8
+
+
+def functions(tree: ast.AST):
+    """(qualified name, function node) of every function and method, nested ones too."""
+    def walk(node, prefix):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                name = f"{prefix}{child.name}"
+                if not isinstance(child, ast.ClassDef):
+                    yield name, child
+                yield from walk(child, name + ".")
+            else:
+                yield from walk(child, prefix)
+    yield from walk(tree, "")
+
+
+def parameters(node: ast.FunctionDef) -> int:
+    """Its parameters, *args and **kwargs one each, a method's self or cls not counted."""
+    args = node.args
+    named = [a.arg for a in (*args.posonlyargs, *args.args, *args.kwonlyargs)]
+    if named and named[0] in ("self", "cls"):
+        named = named[1:]
+    return len(named) + (args.vararg is not None) + (args.kwarg is not None)
+
+
+def public(module: str, qualified: str) -> bool:
+    """A function of the public API: one of jaxbridge.api's named in jaxbridge.__all__, or a method of such a class."""
+    import jaxbridge
+    return module.startswith("jaxbridge.api") and qualified.split(".")[0] in jaxbridge.__all__
+
+
+def too_long_and_too_wide(package: str = "jaxbridge") -> tuple[list[str], list[str]]:
+    long, wide = [], []
+    for name, path in modules():
+        if not name.startswith(package):
+            continue
+        for qualified, node in functions(ast.parse(path.read_text())):
+            lines = node.end_lineno - node.lineno + 1
+            if name.startswith(LONG_FUNCTION_ROOMS) and lines > MAX_FUNCTION_LINES:
+                long.append(f"{name}.{qualified}: {lines} lines")
+            if parameters(node) > MAX_PARAMETERS and not public(name, qualified):
+                wide.append(f"{name}.{qualified}: {parameters(node)} parameters")
+    return long, wide
+
+
+def test_no_function_outgrows_a_screen_or_takes_more_than_eight_parameters():
+    long, wide = too_long_and_too_wide()
+    assert not long, f"split these (cap: {MAX_FUNCTION_LINES} lines a function in api/ and run/): {long}"
+    assert not wide, f"group what travels together (cap: {MAX_PARAMETERS} parameters outside the public API): {wide}"
+
+
+def test_the_function_caps_see_what_they_cap():
+    """The walk finds nested functions and methods and counts as documented (so the caps above can fail)."""
+    tree = ast.parse("class A:\n    def m(self, a, *b, c, **d):\n        def inner(x):\n            return x\n")
+    found = dict(functions(tree))
+    assert set(found) == {"A.m", "A.m.inner"} and parameters(found["A.m"]) == 4 and parameters(found["A.m.inner"]) == 1
+    assert public("jaxbridge.api.training", "prepare") and not public("jaxbridge.core.meta_policy", "rollout")
+    assert not public("jaxbridge.api.training", "_plan")
