@@ -12,10 +12,11 @@ function. train.py and eval.py are these calls behind flags.
 
 docs/API.md shows each call with what it returns. Bad input raises InputError (a ValueError) in one line.
 """
-from jaxbridge.api.config import make_config, settings_help
+from jaxbridge.api.config import make_config, preset_values, settings_help
 from jaxbridge.api.devices import local_devices
 from jaxbridge.api.envs import env_names, load_env, make_env, tasks
 from jaxbridge.api.policies import Bridges, Drawn, Episodes, HandMade, Policy, hand_made, load, side_by_side
+from jaxbridge.api.results import read_experiment, run_labels, write_comparison
 from jaxbridge.api.sweeps import SWEEP_TASKS, NoveltySweep, sweep_lines, sweep_novelties
 from jaxbridge.api.training import (Experiment, Training, all_approaches, default_approaches, make_train, prepare, prepare_resume,
                                     release_locks, resume, train)
@@ -37,5 +38,5 @@ __all__ = ["ALL_APPROACHES", "APPROACHES", "Attention", "Bridges", "Drawn", "Env
            "Interrupted", "LOW_LEVEL", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "SIGNATURE", "Policy", "SWEEP_TASKS",
            "TrainConfig", "TrainOutput", "Training", "WriteError", "all_approaches", "default_approaches", "env_names", "hand_made",
            "load", "load_env", "local_devices", "make_config", "make_env", "make_train", "prepare", "prepare_resume",
-           "release_locks",            "resume", "seed_keys", "settings_help", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",
-           "train"]
+           "preset_values", "read_experiment", "release_locks", "resume", "run_labels", "seed_keys", "settings_help", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",
+           "train", "write_comparison"]

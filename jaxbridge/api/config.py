@@ -8,7 +8,7 @@ from typing import Sequence
 from jaxbridge.api.envs import EnvLike, env_name, load_env, seed_list
 from jaxbridge.core import grid
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.presets import preset_values
+from jaxbridge.core import presets
 from jaxbridge.utils.errors import InputError, refusing
 
 
@@ -32,7 +32,7 @@ def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = 
     env = TrainConfig.env if env is None else env
     env_cls = load_env(env)
     with refusing():  # an unknown setting or learner, a value out of its range (e.g. a negative bonus)
-        config = TrainConfig.over_preset(preset_values(given.pop("preset", TrainConfig.preset), env_cls),
+        config = TrainConfig.over_preset(presets.preset_values(given.pop("preset", TrainConfig.preset), env_cls),
                                          env=env_name(env), **given)
     with refusing("set"):
         config = dataclasses.replace(config, **setting_values(settings or [], config))
@@ -90,3 +90,10 @@ def _check_learner(config: TrainConfig, env_cls) -> None:
     from jaxbridge.learn.learners import learner_factory
     with refusing("learner"):
         learner_factory(config.learner.name)
+
+def preset_values(preset: str, env: EnvLike) -> dict:
+    """{setting: value}: what `preset` (a key of PRESETS) sets on `env` before yours, `make_config`'s first
+    layer over TrainConfig's defaults, with "preset" itself. InputError for an unknown preset or env."""
+    env_cls = load_env(env)
+    with refusing("preset"):
+        return presets.preset_values(preset, env_cls)

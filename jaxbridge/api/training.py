@@ -65,6 +65,15 @@ class Experiment:
         """The mean over seeds of a metric per cycle (float[cycles])."""
         return self.metrics[approach][metric].mean(axis=0)
 
+    def cells(self, run: str = "ours", cycles: Sequence[int] | None = None) -> dict[int, dict]:
+        """results.md's cells of a run's test solve rate: {cycle: {mean, mean_ci, iqm, iqm_ci, min, max}} over
+        seeds, intervals the 95% bootstrap ones, as results.csv computes them; at `cycles` (default: the last)."""
+        from jaxbridge.run.artifacts import at_cycle, curve_statistics
+
+        rates = self.metrics[run]["test_solve_rate"]
+        curve = curve_statistics(rates, self.metrics[run]["train_success_rate"])["test_solve_rate"]
+        return {cycle: at_cycle(curve, cycle) for cycle in (cycles or [rates.shape[1]])}
+
     def report(self) -> str:
         """One line per run: its test solve rate at the last cycle, its smooth test reward there and its
         seconds; then what the numbers are (means over seeds with 95% intervals)."""
