@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
 import tempfile
 import time
@@ -24,9 +25,7 @@ import jax
 
 import jaxbridge
 from bench.training import AUTHORS_WHOLE_RUN_S  # one seed-run of "ours", per env (results.md)
-from jaxbridge.learn.approaches import APPROACHES
-from jaxbridge.learn.devices import describe, device_count_arg, select_devices
-from jaxbridge.learn.devices import default_workers
+from jaxbridge.utils.cli import auto_or_positive_int
 
 
 def main() -> None:
@@ -36,11 +35,11 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
     parser.add_argument("--approaches", default="all", help="comma-separated approaches or all (default: all)")
     parser.add_argument("--workers", type=int, default=None, help="approaches at a time (default: one per core)")
-    parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
+    parser.add_argument("--devices", type=auto_or_positive_int, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--keep", type=Path, default=None, help="write the experiment here instead of a temp dir")
     args = parser.parse_args()
-    devices = select_devices(args.devices)  # before JAX starts
-    names = list(APPROACHES) if args.approaches == "all" else args.approaches.split(",")
+    devices = jaxbridge.local_devices(args.devices)  # before JAX starts
+    names = list(jaxbridge.APPROACHES) if args.approaches == "all" else args.approaches.split(",")
     with tempfile.TemporaryDirectory() as tmp:
         out = args.keep or Path(tmp) / args.env
         start = time.perf_counter()
@@ -48,9 +47,10 @@ def main() -> None:
                                     devices=devices).summaries
         total = time.perf_counter() - start
         results = (out / "results.md").read_text()
-    print(f"jax {jax.__version__}, each approach's seeds over {describe(devices)} device(s)")
+    kinds = "+".join(sorted({d.platform for d in devices}))
+    print(f"jax {jax.__version__}, each approach's seeds over {len(devices)} {kinds} device(s)")
     print(f"{args.env}: {len(names)} approaches x {args.num_seeds} seeds x {args.cycles} cycles, "
-          f"{args.workers or default_workers(names)} at a time")
+          f"{args.workers or max(1, min(len(names), os.cpu_count() or 1))} at a time")
     for name, info in summaries.items():
         print(f"  {name:>20}: {info['elapsed_s']:7.1f} s   smooth test reward {info['smooth_reward_final']['mean']:.3f}")
     seed_runs, authors = len(names) * args.num_seeds, AUTHORS_WHOLE_RUN_S[args.env]

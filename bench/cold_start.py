@@ -19,10 +19,9 @@ import json, sys
 from jaxbridge.utils import compile_cache
 compile_cache.enable(sys.argv[1])
 from bench.training import measure_cycles
-from jaxbridge.core.config import TrainConfig
-from jaxbridge.learn.devices import select_devices
-config = TrainConfig.for_env(sys.argv[2], approach=sys.argv[3], num_seeds=int(sys.argv[4]), cycles=2)
-run = measure_cycles(config, select_devices(), 2)
+import jaxbridge
+config = jaxbridge.TrainConfig.for_env(sys.argv[2], approach=sys.argv[3], num_seeds=int(sys.argv[4]), cycles=2)
+run = measure_cycles(config, jaxbridge.local_devices(), 2)
 print(json.dumps({"first_cycle_s": run["times"][0], **run["first"].as_dict()}))
 """
 

@@ -20,12 +20,7 @@ import time
 from pathlib import Path
 
 import jaxbridge
-from envs_jax import env_class
-from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.presets import AUTHORS, preset_values
-from jaxbridge.learn.devices import select_devices
-from jaxbridge.run.artifacts import at_cycle, curve_statistics
-from jaxbridge.run.comparison import read_metrics
+from jaxbridge import TrainConfig
 from jaxbridge.utils import stats
 
 FIRST_VALIDATION_SEED = 100
@@ -34,7 +29,7 @@ CYCLES = (25, 100)  # the table's columns (a shorter run reports its last cycle)
 
 def rows(env: str) -> dict[str, tuple[dict, dict]]:
     """{departure: (our values, the authors' values)} of every switchable departure where they differ on `env`."""
-    ours, theirs = preset_values("jaxbridge", env_class(env)), preset_values("authors", env_class(env))
+    ours, theirs = jaxbridge.preset_values("jaxbridge", env), jaxbridge.preset_values("authors", env)
     base = TrainConfig.for_env(env)
     groups = {"clip_bootstrap": ("clip_bootstrap", "q_ensemble"),  # Doorknobs' two guards are one departure
               "fit_patience": ("fit_patience", "updates_per_cycle")}  # the fitting schedule is one
@@ -47,7 +42,6 @@ def rows(env: str) -> dict[str, tuple[dict, dict]]:
         authors = {f: theirs[f] for f in members}
         if mine != authors:
             out[name] = (mine, authors)
-    assert set(AUTHORS) <= set(theirs)
     return out
 
 
@@ -69,16 +63,16 @@ def train_or_read(config: TrainConfig, experiment: Path, devices: list) -> dict:
     """Train `config`'s ours into `experiment` unless it is finished there (resuming a started run);
     its test solve rates' statistics at CYCLES."""
     done = experiment / "ours" / "metrics.csv"
-    finished = done.is_file() and read_metrics(experiment / "ours")["test_solve_rate"].shape[1] == config.cycles
+    finished = (done.is_file()
+                and jaxbridge.read_experiment(experiment).metrics["ours"]["test_solve_rate"].shape[1] == config.cycles)
     if not finished and (experiment / "experiment.json").is_file():
         jaxbridge.resume(experiment, devices=devices)
     elif not finished:  # every field as given: the config is `config` exactly
         experiment.parent.mkdir(parents=True, exist_ok=True)
         fields = {f.name: getattr(config, f.name) for f in dataclasses.fields(config) if f.name != "env"}
         jaxbridge.train(config.env, "ours", out=experiment.parent, name=experiment.name, devices=devices, **fields)
-    m = read_metrics(experiment / "ours")
-    curve = curve_statistics(m["test_solve_rate"], m["train_success_rate"])["test_solve_rate"]
-    return {c: at_cycle(curve, min(c, config.cycles)) for c in CYCLES}
+    cells = jaxbridge.read_experiment(experiment).cells("ours", [min(c, config.cycles) for c in CYCLES])
+    return {c: cells[min(c, config.cycles)] for c in CYCLES}
 
 
 def main() -> None:
@@ -91,7 +85,7 @@ def main() -> None:
     parser.add_argument("--rows", default="all", help="departures to measure, comma-separated, or all (default: all)")
     parser.add_argument("--directions", default="minus,plus", help="minus, plus or both (default: %(default)s)")
     args = parser.parse_args()
-    devices = select_devices()  # before JAX starts
+    devices = jaxbridge.local_devices()  # before JAX starts
     table = rows(args.env)
     names = list(table) if args.rows == "all" else args.rows.split(",")
     unknown = [n for n in names if n not in table]

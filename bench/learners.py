@@ -19,10 +19,10 @@ import shutil
 import sys
 import time
 
+import jaxbridge
 from bench.paper import (Steps, command_line, csv_text, records_folder, results_rows, seed_flags, seeds_text,
                          test_seed_args, train_step, write_record)
 from bench.records import ENVS, git_commit, machine
-from jaxbridge.run.comparison import write_comparison
 
 LEARNERS = {"dqn": ("double DQN", []), "pqn": ("PQN", ["--preset", "pqn"])}  # run name: (label, train.py flags)
 
@@ -40,7 +40,7 @@ def main(argv=None) -> int:
     for name in LEARNERS:  # what the comparison reads of a run: its metrics.csv
         (compared / name).mkdir(parents=True, exist_ok=True)
         shutil.copy(runs / f"{env}-{name}" / "ours" / "metrics.csv", compared / name / "metrics.csv")
-    write_comparison(compared, env, {name: f"ours, {label}" for name, (label, _) in LEARNERS.items()})
+    jaxbridge.write_comparison(compared, {name: f"ours, {label}" for name, (label, _) in LEARNERS.items()}, env)
 
     out = records_folder(args)
     (out / "learners.csv").write_text(csv_text(results_rows(compared)))

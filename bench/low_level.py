@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxbridge.learn.approaches import get_approach
+import jaxbridge
 from jaxbridge.utils import stats
 
 ENVS = ("light_switch_door", "doorknobs", "coffee")
@@ -28,10 +28,11 @@ def load_run(run_dir: Path) -> dict:
     rows = list(csv.DictReader((run_dir / "metrics.csv").open()))
     seeds = sorted({int(r["seed"]) for r in rows}, key=int)
     per_seed = lambda field: np.array([[float(r[field]) for r in rows if int(r["seed"]) == s] for s in seeds])
-    approach = get_approach(config["approach"])
+    approach = config["approach"]
     budget = config.get("low_level_budget", 1)
-    label = approach.label + (f", {budget}x budget" if approach.low_level and budget != 1 else "")
-    return {"env": config["env"], "label": label, "approach": approach.name, "budget": budget, "seeds": seeds,
+    low_level = approach in jaxbridge.LOW_LEVEL
+    label = jaxbridge.run_labels([approach])[approach] + (f", {budget}x budget" if low_level and budget != 1 else "")
+    return {"env": config["env"], "label": label, "approach": approach, "budget": budget, "seeds": seeds,
             "rates": per_seed("test_solve_rate"), "steps": np.cumsum(per_seed("train_env_steps"), axis=1)}
 
 

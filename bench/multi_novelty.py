@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+import jaxbridge
 from bench.paper import Steps, csv_text, train_step
 from bench.records import git_commit, machine, run_child
 from jaxbridge.utils.stats import bootstrap_ci
@@ -55,10 +56,9 @@ def interval_row(scores: np.ndarray) -> dict:
 
 def curve_rows(run: Path, protocol: str, approaches: list[str]) -> list[dict]:
     """The test solve rate at AT_CYCLES per approach of a run, per seed from its metrics.csv."""
-    from jaxbridge.run.comparison import read_metrics
-    rows = []
+    rows, metrics = [], jaxbridge.read_experiment(run).metrics
     for name in approaches:
-        rates = read_metrics(run / name)["test_solve_rate"]  # [seeds, cycles]
+        rates = metrics[name]["test_solve_rate"]  # [seeds, cycles]
         for cycle in (c for c in AT_CYCLES if c <= rates.shape[1]):
             rows.append({"approach": name, "protocol": protocol, "cycle": cycle, "seeds": rates.shape[0],
                          **interval_row(rates[:, cycle - 1])})
@@ -67,7 +67,6 @@ def curve_rows(run: Path, protocol: str, approaches: list[str]) -> list[dict]:
 
 def kind_rows(run: Path, approaches: list[str]) -> list[dict]:
     """Each approach's final greedy bridges on each kind alone: per seed, the fraction solved."""
-    import jaxbridge
     rows = []
     for name in approaches:
         policy = jaxbridge.load(run, name)
@@ -92,9 +91,7 @@ def parse(argv) -> argparse.Namespace:
 
 def main(argv=None) -> int:
     args = parse(argv)
-    from jaxbridge.api.training import default_approaches
-    from envs_jax import env_class
-    names = args.approaches.split(",") if args.approaches else default_approaches(env_class(ENV))
+    names = args.approaches.split(",") if args.approaches else jaxbridge.default_approaches(jaxbridge.load_env(ENV))
     runs, start = args.runs.resolve(), time.perf_counter()
     runs.mkdir(parents=True, exist_ok=True)
     records = (args.records or runs / "records").resolve()

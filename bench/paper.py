@@ -30,12 +30,11 @@ import sys
 import time
 from pathlib import Path
 
+import jaxbridge
 from bench.ledger import add_reason_flags, append, seed_set
 from bench.records import (ENVS, RECORDS, ROOT, TEST_SEEDS, TEST_SETS, check_clean, git_commit, machine, refuse, run_child,
                            shown)
 from bench.results_blocks import PRESET_RUN
-from jaxbridge.run.comparison import read_metrics, run_labels, write_comparison
-from jaxbridge.run.experiments import load_experiment
 from jaxbridge.utils.files import write_atomic
 
 
@@ -48,17 +47,12 @@ def train_step(experiment: Path, flags: list[str]) -> dict:
 
 def oracle_rows(env: str, protocols: list[str], seeds: list[int]) -> tuple[list[dict], float]:
     """The oracle bridge on every seed's test tasks under each protocol: one row per protocol and seed."""
-    from envs_jax import env_class
-    from jaxbridge.core.bridges import make_bridge
-    from jaxbridge.core.tasks import evaluation_batch
-    from jaxbridge.run.evaluate import run_bridge, summarise
-
     start, rows = time.perf_counter(), []
     for protocol in protocols:
-        batch = evaluation_batch(env_class(env), seeds, protocol=protocol)
-        for seed in summarise(batch, run_bridge(batch, make_bridge("oracle", batch.env))):
-            rows.append({"protocol": protocol, "seed": seed.seed, "tasks": seed.tasks,
-                         "solve_rate": f"{seed.solve_rate:.4f}"})
+        episodes = jaxbridge.hand_made(env, "oracle", protocol).evaluate(seeds=seeds)
+        for seed, solve_rate in episodes.per_seed().items():
+            rows.append({"protocol": protocol, "seed": seed, "tasks": int((episodes.seeds == seed).sum()),
+                         "solve_rate": f"{solve_rate:.4f}"})
     return rows, round(time.perf_counter() - start, 1)
 
 
@@ -85,13 +79,13 @@ def write_run_records(run: Path, records: Path, name: str) -> None:
 def seed_rows(experiment: Path) -> list[dict]:
     """Each run's seeds at its last cycle (test solve rate, smooth test reward): what a ratio between two
     approaches needs for its paired interval."""
-    rows = []
-    for run in sorted(p.parent for p in experiment.glob("*/metrics.csv")):
-        metrics = read_metrics(run, ("test_solve_rate", "test_smooth_reward"))
-        rows += [{"approach": run.name, "seed": seed, "cycle": metrics["test_solve_rate"].shape[1],
+    rows, read = [], jaxbridge.read_experiment(experiment)
+    for run in sorted(read.metrics):
+        metrics = read.metrics[run]
+        rows += [{"approach": run, "seed": seed, "cycle": metrics["test_solve_rate"].shape[1],
                   "test_solve_rate": f"{metrics['test_solve_rate'][i, -1]:.4f}",
                   "test_smooth_reward": f"{metrics['test_smooth_reward'][i, -1]:.4f}"}
-                 for i, seed in enumerate(metrics["seeds"])]
+                 for i, seed in enumerate(read.seeds)]
     return rows
 
 
@@ -205,7 +199,8 @@ def main(argv=None) -> int:
     train = steps.run("train", lambda: train_step(main_run, ["--env", env, *seeds]))
     preset = steps.run("train_authors_preset", lambda: train_step(
         preset_run, ["--env", env, "--approaches", "ours", "--preset", "authors", *seeds]))
-    (config, approaches, _), (preset_config, _, _) = load_experiment(main_run), load_experiment(preset_run)
+    experiment, preset_config = jaxbridge.read_experiment(main_run), jaxbridge.read_experiment(preset_run).config
+    config, approaches = experiment.config, list(experiment.approaches)
     protocols = list(dict.fromkeys([config.test_protocol, preset_config.test_protocol]))
     test_seeds = list(range(args.seed_set, args.seed_set + args.num_seeds))
     oracle = steps.run("oracle", lambda: dict(zip(("rows", "wall_s"), oracle_rows(env, protocols, test_seeds))))
@@ -213,8 +208,8 @@ def main(argv=None) -> int:
 
     out = records_folder(args)
     # the tables and figure as this checkout draws them
-    write_comparison(main_run, env, run_labels(approaches))
-    write_comparison(preset_run, env, run_labels(["ours"]))
+    jaxbridge.write_comparison(main_run, title=env)
+    jaxbridge.write_comparison(preset_run, title=env)
     rows = results_rows(main_run) + results_rows(preset_run, {"ours": PRESET_RUN})
     (out / "results.csv").write_text(csv_text(rows))
     (out / "oracle.csv").write_text(csv_text(oracle["rows"]))

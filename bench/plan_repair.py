@@ -20,12 +20,11 @@ from __future__ import annotations
 import sys
 import time
 
+import jaxbridge
 from bench.paper import (Steps, command_line, records_folder, seed_flags, seeds_text, test_seed_args, train_step,
                          write_record, write_run_records)
 from bench.records import ENVS, git_commit, machine, run_child, shown
 from envs_jax import VARIANTS
-from jaxbridge.run.comparison import run_labels, write_comparison
-from jaxbridge.run.experiments import load_experiment
 
 APPROACHES = "ours,plan_progress,plan_progress_replan"
 
@@ -40,8 +39,8 @@ def main(argv=None) -> int:
 
     train = steps.run("train", lambda: train_step(run, ["--env", env, "--approaches", APPROACHES, *seed_flags(args)]))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
-    _, approaches, _ = load_experiment(run)
-    write_comparison(run, env, run_labels(approaches))
+    approaches = list(jaxbridge.read_experiment(run).approaches)
+    jaxbridge.write_comparison(run, title=env)
 
     out = records_folder(args)
     write_run_records(run, out, "plan_repair")

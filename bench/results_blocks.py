@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
+import jaxbridge
 from bench.records import DISTRACTOR_ENVS, ENVS, RECORDS
-from envs_jax import VARIANTS, env_class
-from jaxbridge.learn.approaches import get_approach
+from envs_jax import VARIANTS
 from jaxbridge.utils import stats
 
 ENV_TITLES = {"light_switch_door": "Light Switch Door", "doorknobs": "Doorknobs", "coffee": "Coffee",
@@ -49,7 +49,7 @@ def ledger_table() -> str:
 
 
 def label(run: str) -> str:
-    return "ours, `--preset authors`" if run == PRESET_RUN else get_approach(run).label
+    return "ours, `--preset authors`" if run == PRESET_RUN else jaxbridge.run_labels([run])[run]
 
 
 # ---------------------------------------------------------------- reading the records
@@ -227,7 +227,7 @@ def novelty_table(env: str, sweep_rows: list[dict], seeds: str, command: str) ->
             float(row["solve_rate"]) if row["solve_rate"] else float("nan"))
     counts = sorted(next(iter(lines_by_label.values())))
     tasks = sweep_rows[0]["tasks"]
-    sweep = env_class(env).novelty_sweep
+    sweep = jaxbridge.load_env(env).novelty_sweep
     out = [f"The number of {sweep.counted} {sweep.setting}: the final bridges of test seeds {seeds}, "
            f"{tasks} tasks per count and seed; mean [95% CI] over seeds (`{command}`).", "",
            f"| {counted.replace('_', ' ')} | " + " | ".join(lines_by_label) + " |", "|---|" + "---|" * len(lines_by_label)]

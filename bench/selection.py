@@ -27,10 +27,10 @@ import json
 import sys
 import time
 
+import jaxbridge
 from bench.paper import (Steps, command_line, records_folder, seed_flags, seeds_text, test_seed_args, train_step,
                          write_record, write_run_records)
 from bench.records import DISTRACTOR_ENVS, ENVS, git_commit, machine, run_child, shown
-from jaxbridge.run.comparison import run_labels, write_comparison
 
 APPROACHES = ("ours", "ours_closest_object", "ours_learned_selection")
 COST_SEEDS, COST_CYCLES = 8, 20
@@ -57,7 +57,7 @@ def main(argv=None) -> int:
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
     attention = steps.run("attention", lambda: run_child(["python", "eval.py", shown(run), "--approach",
                                                           "ours_learned_selection", "--attention"], keep_stdout=True))
-    write_comparison(run, env, run_labels(list(names)))
+    jaxbridge.write_comparison(run, jaxbridge.run_labels(names), env)
 
     out = records_folder(args)
     write_run_records(run, out, "selection")

@@ -172,3 +172,40 @@ def test_the_function_caps_see_what_they_cap():
     assert set(found) == {"A.m", "A.m.inner"} and parameters(found["A.m"]) == 4 and parameters(found["A.m.inner"]) == 1
     assert public("jaxbridge.api.training", "prepare") and not public("jaxbridge.core.meta_policy", "rollout")
     assert not public("jaxbridge.api.training", "_plan")
+
+
+# bench/'s study pipelines (the records pages are made of: paper, plan repair, learners, selection,
+# departures, ...) go through the public API as train.py and eval.py do: `jaxbridge` and its utils. These
+# micro-benchmarks time or probe the package's parts, so they may import below the API:
+BENCH_INSIDE = {
+    "__main__": "the suite's runner: configs and devices for the micro-benchmarks it times",
+    "bridge_steps": "counts a trained policy's bridge steps in the jitted cycle's own test rollout",
+    "decisions": "records the greedy test rollout's decisions (meta_policy.rollout)",
+    "devices": "seconds per jitted cycle on 1 vs 2 devices",
+    "doorknobs": "times Doorknobs' skill steps and the oracle's bare rollout",
+    "evaluation": "times an evaluation's parts: task batches, plan tables, rollouts",
+    "knob_offsets": "probes the Q-network's candidates at Doorknobs' knob offsets",
+    "maple_q": "times Maple Q's cycle part by part",
+    "meta_policy": "env steps/s of the bare meta-policy",
+    "report": "the comparison's rows (run/comparison) printed beside the authors' logged cells",
+    "scaling": "seconds as the seed count grows, per seed block",
+    "sweep": "times a --sweep's programs",
+    "training": "seconds for a run's compiled programs",
+    "update_parts": "where a learning step's time goes",
+    "updates": "times the double-DQN updates alone",
+}
+
+
+def below_the_api(path: Path) -> set[str]:
+    """What `path` imports of the package below its public API (jaxbridge's __all__ and jaxbridge.utils)."""
+    import jaxbridge
+
+    public = {"jaxbridge"} | {f"jaxbridge.{name}" for name in jaxbridge.__all__}
+    return {name for name in imported(path) if name.split(".")[0] in ("jaxbridge", "planner")
+            and name not in public and not name.startswith("jaxbridge.utils")}
+
+
+def test_only_the_listed_micro_benchmarks_import_below_the_public_api():
+    found = {path.stem: below for path in sorted((ROOT / "bench").glob("*.py")) if (below := below_the_api(path))}
+    assert set(found) <= set(BENCH_INSIDE), {name: found[name] for name in set(found) - set(BENCH_INSIDE)}
+    assert set(BENCH_INSIDE) <= set(found), f"these no longer reach inside: strike them off BENCH_INSIDE: {set(BENCH_INSIDE) - set(found)}"
