@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from envs_jax.base import BridgeObs
 from envs_jax.light_switch_door import env as lsd
 from envs_jax.light_switch_door.env import LightSwitchDoor
 from jaxbridge.run import checkpoint
@@ -19,7 +20,7 @@ from jaxbridge.learn.devices import SeedMesh
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.dqn import init_learner, learn, make_dqn, minibatch_indices, td_targets
 from jaxbridge.learn.learner import epsilon
-from jaxbridge.core.meta_policy import Controls, rollout
+from jaxbridge.core.meta_policy import Controls, MetaPolicy, rollout
 from jaxbridge.core.observations import FULL_STATE
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
@@ -116,7 +117,7 @@ def test_transitions_count_the_env_steps_from_their_decision_to_the_next():
     which runs the plan to the goal; the three spans add up to the episode after the first decision."""
     from envs_jax.coffee.env import Coffee
     batch = evaluation_batch(Coffee, [0], 1, protocol="jaxbridge")
-    result, rec = rollout(batch.env, make_bridge("oracle", batch.env), None, batch.arrays,
+    result, rec = rollout(MetaPolicy(batch.env, make_bridge("oracle", batch.env)), batch.arrays,
                           jax.random.split(jax.random.key(0), 1), batch.max_steps, record=True)
     records = jax.tree.map(lambda x: x[:, 0], rec)
     transitions, valid = episode_transitions(records, result.success[0], batch.env.num_skills, 0.0, True)
@@ -192,7 +193,7 @@ def test_a_wide_observation_is_split_off_the_candidates_without_changing_q_or_th
     whole = np.asarray(net.apply(params, encode(ENV, features, jnp.asarray(skills), param)))
     np.testing.assert_allclose(np.asarray(net.apply(params, split)), whole, atol=1e-5)
     ground = jnp.ones(ENV.num_skills + 1, jnp.int32)
-    action, best = best_candidate(ENV, net, params, features, ground, skills, jax.random.key(4))
+    action, best = best_candidate(ENV, net, params, BridgeObs(features, ground), skills, jax.random.key(4))
     drawn = sample_candidates(ENV, skills, jax.random.key(4))  # best_candidate's own parameter draws
     whole = np.asarray(net.apply(params, encode(ENV, features, jnp.asarray(skills), drawn)))
     chosen = int(np.argmax(whole))
@@ -232,7 +233,7 @@ def test_minibatches_drawn_up_front_are_the_draws_of_one_split_per_update():
 def test_one_transition_per_decision_and_call_planner_spans_the_plan():
     spec = lsd.LightSwitchDoorTask(5, (1,))
     batch = make_batch(LightSwitchDoor, [spec], [0], horizons=[100], env=ENV)
-    result, rec = rollout(ENV, make_bridge("oracle", ENV), None, batch.arrays,
+    result, rec = rollout(MetaPolicy(ENV, make_bridge("oracle", ENV)), batch.arrays,
                           jax.random.split(jax.random.key(0), 1), 100, record=True)
     records = jax.tree.map(lambda x: x[:, 0], rec)
     transitions, valid = episode_transitions(records, result.success[0], ENV.num_skills, 0.5)
@@ -255,9 +256,8 @@ def test_the_buffer_reads_next_features_back_from_the_following_slot_across_wrap
     monkeypatch.setattr(dqn, "RELABEL_CHUNK", chunk)
     batch = evaluation_batch(LightSwitchDoor, [0, 1], 4)
     controls = Controls(observation=FULL_STATE)  # the full state: every decision's observation differs
-    result, rec = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
-                          jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True,
-                          controls=controls)
+    result, rec = rollout(MetaPolicy(batch.env, RandomBridge(batch.env), None, controls), batch.arrays,
+                          jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True)
     transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None))(
         rec, result.success, batch.env.num_skills, 0.0)
     capacity = 23
@@ -385,7 +385,7 @@ def test_checkpoint_round_trip_restores_identical_greedy_actions(tiny_twice, tmp
     keys = jax.random.split(jax.random.key(6), 32)
 
     def greedy(params):
-        action, _ = jax.vmap(lambda f, g, k: best_candidate(ENV, net, params, f, g, skills, k))(features, ground, keys)
+        action, _ = jax.vmap(lambda o, k: best_candidate(ENV, net, params, o, skills, k))(BridgeObs(features, ground), keys)
         return np.asarray(action.skill), np.asarray(action.param)
     for seed in range(TINY.num_seeds):
         before = greedy(jax.tree.map(lambda x: x[seed], learners.params))
@@ -451,7 +451,7 @@ def test_a_split_learner_relabels_and_updates_as_the_unsplit_one():
     """Through the learner: the same transitions stored split (varying entries and a task index) or whole
     give the same TD targets and the same parameters after an update, to float tolerance."""
     batch = evaluation_batch(LightSwitchDoor, [0], 3)
-    result, rec = rollout(batch.env, RandomBridge(batch.env), None, batch.arrays,
+    result, rec = rollout(MetaPolicy(batch.env, RandomBridge(batch.env)), batch.arrays,
                           jax.random.split(jax.random.key(0), batch.size), 40, record=True)
     full = jax.vmap(jax.vmap(batch.env.full_state))(rec.env_state)  # every step's full state, [T, B, S]
     config = TrainConfig(approach="no_feature_selection", buffer_capacity=256, n_target_sample=3, batch_size=32)
@@ -520,7 +520,7 @@ def test_a_fit_leaves_out_the_weights_of_the_inputs_its_training_tasks_never_fil
 
 
 def test_rollouts_take_one_shared_network_as_they_take_a_copy_per_episode():
-    """rollout(shared_params=True) gives every episode the one network and exploration rate it is passed:
+    """A MetaPolicy with shared_params gives every episode the one network and exploration rate it is passed:
     exploring at epsilon 1 (choices from the keys alone), the episodes are exactly those of per-episode copies."""
     from jaxbridge.learn.q_bridge import QBridge, QBridgeParams
     batch = evaluation_batch(LightSwitchDoor, [0, 1], 3)
@@ -529,8 +529,9 @@ def test_rollouts_take_one_shared_network_as_they_take_a_copy_per_episode():
     bridge, keys, n = QBridge(batch.env, net, 10), jax.random.split(jax.random.key(1), batch.size), batch.size
     controls = Controls(observation=FULL_STATE)
     copies = QBridgeParams(q=jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), params), epsilon=jnp.ones(n))
-    each, _ = rollout(batch.env, bridge, copies, batch.arrays, keys, batch.max_steps, controls=controls)
-    shared, _ = rollout(batch.env, bridge, QBridgeParams(q=params, epsilon=jnp.float32(1.0)), batch.arrays, keys,
-                        batch.max_steps, controls=controls, shared_params=True)
+    each, _ = rollout(MetaPolicy(batch.env, bridge, copies, controls), batch.arrays, keys, batch.max_steps)
+    one = QBridgeParams(q=params, epsilon=jnp.float32(1.0))
+    shared, _ = rollout(MetaPolicy(batch.env, bridge, one, controls, shared_params=True), batch.arrays, keys,
+                        batch.max_steps)
     chex.assert_trees_all_equal(shared, each)
     assert int(each.bridge_decisions.sum()) > 0
