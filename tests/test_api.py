@@ -16,16 +16,16 @@ from run_helpers import train as train_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 RATES = ("0.001", "0.0003")  # 0.001 is the default
-CONFIG = jaxbridge.make_config("light_switch_door", seeds=4, cycles=10, updates_per_cycle=20, episodes_per_cycle=2,
-                               checkpoint_every=10)
+CONFIG = jaxbridge.make_config("light_switch_door", seeds=4, cycles=5, updates_per_cycle=20, episodes_per_cycle=2,
+                               checkpoint_every=5)
 
 
 @pytest.fixture(scope="module")
 def cli_metrics(tmp_path_factory):
-    """train.py's metrics.csv of LSD ours, 4 seeds x 10 cycles, at each learning rate (one sweep)."""
+    """train.py's metrics.csv of LSD ours, 4 seeds x 5 cycles, at each learning rate (one sweep)."""
     out = tmp_path_factory.mktemp("runs")
-    proc = train_cli("--env", "light_switch_door", "--approaches", "ours", "--num-seeds", "4", "--cycles", "10",
-                     "--updates-per-cycle", "20", "--episodes-per-cycle", "2", "--checkpoint-every", "10",
+    proc = train_cli("--env", "light_switch_door", "--approaches", "ours", "--num-seeds", "4", "--cycles", "5",
+                     "--updates-per-cycle", "20", "--episodes-per-cycle", "2", "--checkpoint-every", "5",
                      "--sweep", f"learning_rate={','.join(RATES)}", "--no-progress", "--out", str(out), "--name", "cli")
     assert proc.returncode == 0, proc.stderr
     return {rate: (out / "cli" / f"ours@learning_rate={rate}" / "metrics.csv").read_text() for rate in RATES}
@@ -52,7 +52,7 @@ def test_make_train_is_train_py_as_one_jitted_function_and_vmaps_over_hyperparam
         mine, theirs = rows(as_csv(jax.tree.map(lambda x: x[i], out.metrics))), rows(cli_metrics[rate])
         assert mine == theirs
     assert rows(cli_metrics["0.001"]) != rows(cli_metrics["0.0003"])  # the two rates learn differently
-    assert out.learners.updates.tolist() == [[10 * 20] * 4] * 2
+    assert out.learners.updates.tolist() == [[5 * 20] * 4] * 2
 
 
 def test_docs_api_md_documents_every_public_name_and_help_explains_the_calls():

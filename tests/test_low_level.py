@@ -39,9 +39,10 @@ def squashed(env, action) -> np.ndarray:
 
 # Every env with CallPlanner (its step runs the planner's stretch); without it, the plain step, on one env:
 # the Doorknobs and Coffee programs take 20-40 s each to compile.
-# Each env once; the CallPlanner dimension under the wrappers on Doorknobs and Coffee (Light Switch
-# Door's is stepped directly by the oracle action sequence below).
-@pytest.mark.parametrize("env_name, call_planner", [("light_switch_door", False), ("doorknobs", True), ("coffee", True)])
+# The wrappers are the env's adapter's alone: Light Switch Door without the CallPlanner dimension (its is
+# stepped directly by the oracle action sequence below), Coffee with it; Doorknobs' adapter resets to its
+# stuck state in the full-state test below.
+@pytest.mark.parametrize("env_name, call_planner", [("light_switch_door", False), ("coffee", True)])
 def test_the_adapter_meets_brax_expectations_under_its_training_wrappers(env_name, call_planner):
     view = adapter(env_name, call_planner)
     env = view.env
