@@ -39,7 +39,7 @@ class Setup:
 
     @cached_property
     def train(self) -> TaskBatch:
-        """episodes_per_cycle copies of each seed's training task, seed-major (built on first use)."""
+        """Each seed's `train_tasks`, one per episode of a cycle, seed-major (built on first use)."""
         return task_batches(self)[0]
 
     @cached_property
@@ -90,7 +90,8 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     """Resolve `config` (its env by name unless `env_cls` is given, its approach)."""
     env_cls = env_cls or env_class(config.env)
     approach = get_approach(config.approach)
-    train_env = env_cls.for_tasks([spec for s in config.seeds for spec in env_cls.train_tasks(s, config.episodes_per_cycle)]).with_quirks(config.env_quirks)
+    train_specs = [spec for s in config.seeds for spec in env_cls.train_tasks(s, config.episodes_per_cycle)]
+    train_env = env_cls.for_tasks(train_specs).with_quirks(config.env_quirks)
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
     make_learner = learner_factory(config.learner.name)
