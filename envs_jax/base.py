@@ -185,6 +185,13 @@ class NoveltyEnv(abc.ABC):
     def train_task(seed: int) -> TaskSpec:
         """The seed's training task (numpy RNG seeded by `seed`)."""
 
+    @classmethod
+    def train_tasks(cls, seed: int, episodes: int) -> list[TaskSpec]:
+        """The training task of each of a cycle's `episodes` episodes, the same in every cycle:
+        `train_task(seed)` for each by default; an env overrides it to show what one task cannot (Multi
+        Novelty: a latched door's stiffness spread over its range)."""
+        return [cls.train_task(seed)] * episodes
+
     @staticmethod
     @abc.abstractmethod
     def test_tasks(seed: int, num_tasks: int = 10) -> list[TaskSpec]:

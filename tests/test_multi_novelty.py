@@ -3,6 +3,8 @@ applicability, the env contract, tasks whose held-out combinations no training t
 the meta-policy, that every kind blocks the planner, the oracle fixes each kind alone, the test tasks and
 the held-out combinations, a random bridge few, and the closest-object rule picks the wrong object at
 the keycard doors."""
+from dataclasses import replace
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -11,7 +13,7 @@ from oracle_vs_planning import oracle_and_pure_planning
 
 from envs_jax import env_class, is_builtin
 from envs_jax.multi_novelty.env import FETCH, FUSE, LIFT, PUSH, MultiNovelty
-from envs_jax.multi_novelty.tasks import BOTH, KEYCARD, LATCHED, MultiNoveltyTask, task_of
+from envs_jax.multi_novelty.tasks import BOTH, KEYCARD, LATCHED, STIFFNESS_RANGE, MultiNoveltyTask, task_of
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.observations import closest_object
@@ -117,15 +119,55 @@ def test_the_env_keeps_the_env_contract():
 
 def test_every_training_task_shows_each_kind_and_no_held_out_combination():
     for seed in range(400):  # development seeds, the test seeds 300-331, and more
-        spec = MultiNovelty.train_task(seed)
-        assert sorted(spec.locks) == [KEYCARD, LATCHED] and spec.fuse_blown, spec
-        assert BOTH not in spec.locks
+        for spec in [MultiNovelty.train_task(seed)] + MultiNovelty.train_tasks(seed, 5):
+            assert sorted(spec.locks) == [KEYCARD, LATCHED] and spec.fuse_blown, spec
+            assert BOTH not in spec.locks
     for seed in SEEDS:
         held_out = MultiNovelty.test_tasks(seed, 10, protocol="held_out")
         assert all(BOTH in spec.locks and spec.fuse_blown for spec in held_out)
         default = MultiNovelty.test_tasks(seed, 10)
         assert all(BOTH not in spec.locks and spec.instances > 3 for spec in default)
         assert all(spec.instances > MultiNovelty.train_task(seed).instances for spec in default + held_out)
+
+
+def test_a_seeds_training_tasks_spread_the_latched_doors_stiffness_over_its_range():
+    """One layout per seed, the latched door's stiffness in the j-th of n equal parts of the range at
+    episode j (to the 0.01 it is rounded to): every part of the range the test doors draw from is shown
+    in every cycle, whatever the seed."""
+    low, high = STIFFNESS_RANGE
+    for seed in range(400):
+        alone = MultiNovelty.train_task(seed)
+        for n in (1, 5, 8):
+            specs = MultiNovelty.train_tasks(seed, n)
+            assert len(specs) == n and specs == MultiNovelty.train_tasks(seed, n)
+            assert {replace(spec, stiffness=()) for spec in specs} == {replace(alone, stiffness=())}  # one layout
+            latched = [spec.stiffness[spec.locks.index(LATCHED)] for spec in specs]
+            assert all(stiffness == 0.0 for spec in specs for lock, stiffness in zip(spec.locks, spec.stiffness)
+                       if lock == KEYCARD)
+            width = (high - low) / n
+            assert all(low + j * width - 0.005 <= s <= low + (j + 1) * width + 0.005 for j, s in enumerate(latched)), latched
+        assert low <= alone.stiffness[alone.locks.index(LATCHED)] <= high
+    # so each test door's stiffness has one of its seed's training pushes within a part's width (0.12 for
+    # 5 episodes) and the rounding, whatever the draws; one stiffness a seed would leave most far off
+    for seed in SEEDS:
+        shown = np.array([max(spec.stiffness) for spec in MultiNovelty.train_tasks(seed, 5)])
+        tested = np.array([s for protocol in ("jaxbridge", "held_out")
+                           for spec in MultiNovelty.test_tasks(seed, 10, protocol=protocol) for s in spec.stiffness if s])
+        assert np.abs(shown[:, None] - tested[None]).min(0).max() <= 0.12 + 0.01
+    one = np.array([max(MultiNovelty.train_task(seed).stiffness) for seed in SEEDS])
+    assert max(np.abs(s - np.array([t for spec in MultiNovelty.test_tasks(seed, 10) for t in spec.stiffness if t])).max()
+               for seed, s in zip(SEEDS, one)) > 0.3
+
+
+def test_the_training_batch_runs_each_episode_on_its_own_training_task():
+    from jaxbridge.core.config import TrainConfig
+    from jaxbridge.learn.setup import make_setup, task_batches
+    setup = make_setup(TrainConfig(env="multi_novelty", num_seeds=2, first_seed=0, episodes_per_cycle=5, num_test_tasks=2))
+    train, _ = task_batches(setup)
+    assert train.specs == MultiNovelty.train_tasks(0, 5) + MultiNovelty.train_tasks(1, 5)
+    assert train.seeds.tolist() == [0] * 5 + [1] * 5
+    stiffness = np.asarray(train.arrays.tasks.stiffness)
+    assert all(len({tuple(row) for row in seed.tolist()}) == 5 for seed in stiffness.reshape(2, 5, -1))  # a door per episode
 
 
 def test_cards_lie_in_their_doors_sections_and_doors_two_cells_apart():

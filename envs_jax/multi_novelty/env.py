@@ -108,6 +108,7 @@ class MultiNovelty(NoveltyEnv):
     full_state_size = 3 + DOOR_ENTRIES * MAX_TASK_DOORS  # robot x, light on, fuse ok; the doors
     domain = DOMAIN
     train_task = staticmethod(tasks.train_task)
+    train_tasks = staticmethod(tasks.train_tasks)
     test_tasks = staticmethod(tasks.test_tasks)
     test_protocols = tasks.TEST_PROTOCOLS
     task_sizes = {"cells": "cells in the row", "doors": "single-lock doors, two cells apart (the fuse is always blown)"}

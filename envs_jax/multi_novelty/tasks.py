@@ -9,7 +9,7 @@ tasks hold single-lock doors only; the held-out protocol's tasks hold doors with
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -98,10 +98,21 @@ def task_of(rng: np.random.Generator, num_cells: int, locks: tuple[int, ...], fu
                             bool(fuse_blown))
 
 
-def train_task(seed: int) -> MultiNoveltyTask:
-    """8 cells, a keycard door and a latched door in a drawn order, and the blown fuse: every kind once."""
+def train_tasks(seed: int, episodes: int) -> list[MultiNoveltyTask]:
+    """A cycle's training tasks, one per episode: the seed's one layout (8 cells, a keycard door and a
+    latched door in a drawn order, the blown fuse: every kind once) with the latched door's stiffness
+    stratified over the episodes, the j-th drawn uniformly in the j-th of `episodes` equal parts of
+    STIFFNESS_RANGE, so every cycle shows the bridge the push across the range the test doors draw from."""
     rng = np.random.default_rng(seed)
-    return task_of(rng, TRAIN_CELLS, tuple(int(lock) for lock in rng.permutation(SINGLE_LOCKS)))
+    layout = task_of(rng, TRAIN_CELLS, tuple(int(lock) for lock in rng.permutation(SINGLE_LOCKS)))
+    edges = np.linspace(*STIFFNESS_RANGE, episodes + 1)
+    pushes = [round(float(rng.uniform(low, high)), 2) for low, high in zip(edges, edges[1:])]
+    return [replace(layout, stiffness=tuple(push if lock & LATCHED else 0.0 for lock in layout.locks)) for push in pushes]
+
+
+def train_task(seed: int) -> MultiNoveltyTask:
+    """The seed's training task alone: its layout, the stiffness drawn over the whole range."""
+    return train_tasks(seed, 1)[0]
 
 
 def test_tasks(seed: int, num_tasks: int = 10, protocol: str = "jaxbridge") -> list[MultiNoveltyTask]:

@@ -327,7 +327,8 @@ def _check_memory(config: TrainConfig, env_cls, names: list[str], hyper_grid: di
 
 def _check_reachable(config: TrainConfig, env_cls) -> None:
     """Refuse a training horizon too short for some seed's training task ever to reach its goal."""
-    needed = {seed: env_cls.train_task(seed).min_steps for seed in config.seeds}
+    needed = {seed: max(spec.min_steps for spec in env_cls.train_tasks(seed, config.episodes_per_cycle))
+              for seed in config.seeds}
     worst = max(needed, key=needed.get)
     if config.train_steps < needed[worst]:
         raise InputError(f"{{setting}} {config.train_steps} is too small to ever reach the goal: seed {worst}'s "

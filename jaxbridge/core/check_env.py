@@ -101,7 +101,10 @@ def _check_specs(cls: type[NoveltyEnv], seed: int, num_test_tasks: int) -> tuple
             f"a list of {num_test_tasks} specs", repr(tests)[:80])
     _expect(train_spec == cls.train_task(seed) and tests == cls.test_tasks(seed, num_test_tasks),
             f"{name}.train_task/test_tasks", "the same specs for the same seed", "different ones")
-    for spec in (train_spec, *tests):
+    episodes = _calls(f"{name}.train_tasks", cls.train_tasks, seed, 3)
+    _expect(isinstance(episodes, list) and len(episodes) == 3 and episodes == cls.train_tasks(seed, 3),
+            f"{name}.train_tasks({seed}, 3)", "a list of 3 specs, the same for the same seed", repr(episodes)[:80])
+    for spec in (train_spec, *episodes, *tests):
         _calls(f"{name} task spec {spec!r:.60}: hash", hash, spec)
         for attr in ("horizon", "min_steps"):
             value = getattr(spec, attr, None)

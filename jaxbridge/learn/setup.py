@@ -39,7 +39,7 @@ class Setup:
 
     @cached_property
     def train(self) -> TaskBatch:
-        """episodes_per_cycle copies of each seed's training task, seed-major (built on first use)."""
+        """Each seed's `train_tasks`, one per episode of a cycle, seed-major (built on first use)."""
         return task_batches(self)[0]
 
     @cached_property
@@ -90,7 +90,8 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     """Resolve `config` (its env by name unless `env_cls` is given, its approach)."""
     env_cls = env_cls or env_class(config.env)
     approach = get_approach(config.approach)
-    train_env = env_cls.for_tasks([env_cls.train_task(s) for s in config.seeds]).with_quirks(config.env_quirks)
+    train_specs = [spec for s in config.seeds for spec in env_cls.train_tasks(s, config.episodes_per_cycle)]
+    train_env = env_cls.for_tasks(train_specs).with_quirks(config.env_quirks)
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
     make_learner = learner_factory(config.learner.name)
@@ -105,7 +106,7 @@ _TASKS_LOCK = threading.Lock()
 @lru_cache(maxsize=4)
 def _build_tasks(env_cls: type[NoveltyEnv], seeds: tuple[int, ...], episodes: int, train_steps: int,
                  num_test_tasks: int, test_protocol: str) -> tuple[TaskBatch, TaskBatch]:
-    train_specs = [env_cls.train_task(s) for s in seeds for _ in range(episodes)]
+    train_specs = [spec for s in seeds for spec in env_cls.train_tasks(s, episodes)]
     train_owner = [s for s in seeds for _ in range(episodes)]
     train = make_batch(env_cls, train_specs, train_owner, horizons=[train_steps] * len(train_specs),
                        progress=SlowWork(f"{env_cls.name}: training tasks and plan tables"))
@@ -114,7 +115,7 @@ def _build_tasks(env_cls: type[NoveltyEnv], seeds: tuple[int, ...], episodes: in
 
 
 def task_batches(setup: Setup) -> tuple[TaskBatch, TaskBatch]:
-    """The seeds' training batch (episodes_per_cycle copies of each seed's training task) and test batch.
+    """The seeds' training batch (each seed's `train_tasks`, one per episode of a cycle) and test batch.
 
     Built once per process for equal settings and shared read-only: every approach of an experiment
     trains and tests on the same tasks, and their host-side build (plan tables, roadmaps) takes seconds.

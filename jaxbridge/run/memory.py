@@ -59,8 +59,8 @@ def task_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
     """One seed's training and test tasks with their plan tables (the first seed's, compiled), which every
     approach of an experiment shares."""
     seed = config.first_seed
-    specs = [env_cls.train_task(seed)] * config.episodes_per_cycle + test_specs(env_cls, seed, config.num_test_tasks,
-                                                                                config.test_protocol)
+    specs = env_cls.train_tasks(seed, config.episodes_per_cycle) + test_specs(env_cls, seed, config.num_test_tasks,
+                                                                              config.test_protocol)
     return tree_bytes(make_batch(env_cls, specs, [seed] * len(specs)).arrays)
 
 
