@@ -167,7 +167,7 @@ class SeedMesh:
     def _put(self, tree: Any) -> Any:
         if not self.spans_processes:
             # Split from host memory: splitting a device array over several devices compiles a slicing
-            # program per leaf shape (a tenth of a second each, dozens per run); keys stay as they are.
+            # program per leaf shape (tens of milliseconds each, dozens per run); keys stay as they are.
             if len(self.devices) > 1:
                 tree = jax.tree.map(lambda x: x if is_prng_key(x) else np.asarray(x), tree)
             return jax.device_put(tree, self.sharding)
