@@ -6,9 +6,8 @@ import textwrap
 from typing import Sequence
 
 from jaxbridge.api.envs import EnvLike, env_name, load_env, seed_list
-from jaxbridge.core import grid
+from jaxbridge.core import grid, presets
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core import presets
 from jaxbridge.utils.errors import InputError, refusing
 
 
@@ -90,6 +89,7 @@ def _check_learner(config: TrainConfig, env_cls) -> None:
     from jaxbridge.learn.learners import learner_factory
     with refusing("learner"):
         learner_factory(config.learner.name)
+
 
 def preset_values(preset: str, env: EnvLike) -> dict:
     """{setting: value}: what `preset` (a key of PRESETS) sets on `env` before yours, `make_config`'s first

@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from envs_jax.base import POSITION_DIM, NoveltyEnv, SkillCall, SkillSpec
+from envs_jax.base import POSITION_DIM, NoveltyEnv, SkillCall, SkillSpec, stack_trees
 from jaxbridge.core.bridges import OracleBridge, RandomBridge
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import evaluation_batch, make_batch
@@ -141,7 +141,7 @@ def _check_planner(env: NoveltyEnv, spec: Any) -> None:
 def _check_device(env: NoveltyEnv, task_arrays: list) -> None:
     """Shapes, dtypes and purity of every device function, on one task and on a batch of two."""
     name = type(env).__name__
-    tasks = jax.tree.map(lambda *xs: jax.device_put(np.stack(xs)), *task_arrays)
+    tasks = stack_trees(task_arrays)
     task = jax.tree.map(lambda x: x[0], tasks)
     state = _calls(f"{name}.reset", jax.jit(env.reset), task)
     _traced_alike(f"{name}.reset", env.reset, task)
