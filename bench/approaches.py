@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import resource
 import tempfile
 import time
@@ -50,7 +49,7 @@ def main() -> None:
     kinds = "+".join(sorted({d.platform for d in devices}))
     print(f"jax {jax.__version__}, each approach's seeds over {len(devices)} {kinds} device(s)")
     print(f"{args.env}: {len(names)} approaches x {args.num_seeds} seeds x {args.cycles} cycles, "
-          f"{args.workers or max(1, min(len(names), os.cpu_count() or 1))} at a time")
+          f"{args.workers or jaxbridge.default_workers(names)} at a time")
     for name, info in summaries.items():
         print(f"  {name:>20}: {info['elapsed_s']:7.1f} s   smooth test reward {info['smooth_reward_final']['mean']:.3f}")
     seed_runs, authors = len(names) * args.num_seeds, AUTHORS_WHOLE_RUN_S[args.env]

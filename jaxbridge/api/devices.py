@@ -12,3 +12,11 @@ def local_devices(count: int | None = None) -> list:
 
     with refusing():
         return select_devices(count)
+
+
+def default_workers(approaches: list[str]) -> int:
+    """How many approaches a training runs at the same time when `workers` is not given: one per CPU
+    core, at most one per approach."""
+    from jaxbridge.learn.devices import default_workers as workers
+
+    return workers(approaches)
