@@ -2,8 +2,8 @@
 (issue 56; docs/design/envs.md, "Light Switch Sequence"; docs/design/learning.md, "Exploration").
 
     python -m bench.fix_length --seeds 0-7                  # development seeds: look
-    python -m bench.fix_length --seeds 300-331 --change "first run" --chosen-on "development seeds 0-7"
-                                                            # the figure's test seeds, with their ledger row
+    python -m bench.fix_length --seeds 300-331 --gamma-lengths 0 --paper-envs none \
+        --change "first run" --chosen-on "development seeds 0-7"   # the figure on its test seeds, with their ledger row
 
 Ours at its default settings is trained on Light Switch Sequence at every fix length k of --lengths
 (`LightSwitchSequence.of_length(k)`), once with epsilon-greedy alone and once with the count bonus
@@ -16,7 +16,8 @@ the last cycle and the first cycle whose mean over seeds reaches 0.9, each with 
 interval over the seeds (jaxbridge/utils/stats.py).
 
 It writes fix_length.json (commit, command, seeds, every figure, times, memory, machine), fix_length.csv
-(one row per method, k and seed) and fix_length.png into docs/results/light_switch_sequence/; uncommitted
+(one row per method, k and seed) and fix_length.png into docs/results/light_switch_sequence/, each named
+fix_length-FIRST-LAST.* on a test-seed set so that the development seeds' records stay beside it; uncommitted
 code is refused (--allow-dirty: a local try, records under RUNS/records). A finished step is kept in
 RUNS/steps.json and not run again, so a stopped command continues where it left off.
 """
@@ -203,6 +204,11 @@ def begin(args: argparse.Namespace) -> None:
         append(name, ENV, command_line(args), args.change, args.chosen_on, git_commit(changed))
 
 
+def record_stem(args: argparse.Namespace) -> str:
+    """The records' file name: fix_length on development seeds, fix_length-300-331 on a test-seed set."""
+    return f"fix_length-{args.seeds}" if args.seed_list[0] in TEST_SETS else "fix_length"
+
+
 def command_line(args: argparse.Namespace) -> str:
     """The command as the record and the ledger show it: the flags that differ from their defaults (not the
     ledger's reasons)."""
@@ -288,11 +294,12 @@ def main(argv=None) -> int:
     out = args.records / ENV
     out.mkdir(parents=True, exist_ok=True)
     solve = {name: {k: run["solve"] for k, run in by_k.items()} for name, by_k in done["runs"].items()}
-    (out / "fix_length.csv").write_text(csv_rows(solve, args.seed_list))
+    stem = record_stem(args)
+    (out / f"{stem}.csv").write_text(csv_rows(solve, args.seed_list))
     table = {n: {int(k): row for k, row in rows.items()} for n, rows in record["table"].items()}
-    figure(out / "fix_length.png", table, {int(k): v for k, v in record["oracle"].items()}, args.cycles, args.seeds)
+    figure(out / f"{stem}.png", table, {int(k): v for k, v in record["oracle"].items()}, args.cycles, args.seeds)
     report(record)
-    return write_record(out / "fix_length.json", record, start)
+    return write_record(out / f"{stem}.json", record, start)
 
 
 if __name__ == "__main__":

@@ -90,19 +90,32 @@ def commits_text(run: dict) -> str:
     return commit_text({"commit": run["commit"]}) + (f" (of its {len(run['steps'])} steps, {shown})" if shown else "")
 
 
-def block(folder: Path = FOLDER) -> str:
-    run = read_json(folder / "fix_length.json")
-    if run is None:
-        return "_Not generated yet: `python -m bench.fix_length --seeds 0-7`._\n"
+def record_lines(run: dict, folder: Path, stem: str) -> list[str]:
+    """One record's tables, cost, memory, command and figure."""
     state = run["state_bytes_per_seed"]
     memory = ", ".join(f"{m} {b / 2**10:,.0f} KiB" for m, b in state.items())
-    lines = [f"Seeds {run['seeds']}, {run['cycles']} cycles, ours at its default settings; each cell: the mean over "
-             "seeds [95% bootstrap CI]. The oracle: the mean test solve rate of the hand-written bridge on the same tasks.",
-             "", *length_table(run), "", longest_text(run), "", *discount_table(run), *paper_table(run),
-             f"Memory: the learner state per seed, {memory}. "
-             "The cost: each run's compiled program timed alone, the two methods one after another in one process, "
-             "in the process's CPU seconds (on a shared machine, other processes move them less than the wall time).", "",
-             f"`{run['command']}`: its trainings {run['training_s']:,.0f} s (compiling included) on "
-             f"{machine_text(run['machine'])}, {commits_text(run)}.", "",
-             f"![Light Switch Sequence, solve rate vs fix length]({folder.name}/fix_length.png)", ""]
+    return [f"Seeds {run['seeds']}, {run['cycles']} cycles, ours at its default settings; each cell: the mean over "
+            "seeds [95% bootstrap CI]. The oracle: the mean test solve rate of the hand-written bridge on the same tasks.",
+            "", *length_table(run), "", longest_text(run), "", *discount_table(run), *paper_table(run),
+            f"Memory: the learner state per seed, {memory}. "
+            "The cost: each run's compiled program timed alone, the two methods one after another in one process, "
+            "in the process's CPU seconds (on a shared machine, other processes move them less than the wall time).", "",
+            f"`{run['command']}`: its trainings {run['training_s']:,.0f} s (compiling included) on "
+            f"{machine_text(run['machine'])}, {commits_text(run)}.", "",
+            f"![Light Switch Sequence, solve rate vs fix length, seeds {run['seeds']}]({folder.name}/{stem}.png)", ""]
+
+
+def block(folder: Path = FOLDER) -> str:
+    """The test seeds' record (the figure's) first, where it exists, then the development seeds' (the discount
+    sweep and the paper's envs)."""
+    test = sorted(folder.glob("fix_length-*.json"))
+    dev = read_json(folder / "fix_length.json")
+    if dev is None and not test:
+        return "_Not generated yet: `python -m bench.fix_length --seeds 0-7`._\n"
+    lines = []
+    for path in test:
+        lines += [f"**Test seeds {path.stem[len('fix_length-'):]}.**", "", *record_lines(read_json(path), folder, path.stem)]
+    if dev is not None:
+        lines += ["**Development seeds.**", "", *record_lines(dev, folder, "fix_length")] if test else record_lines(
+            dev, folder, "fix_length")
     return "\n".join(lines)
