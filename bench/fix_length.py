@@ -215,9 +215,10 @@ def command_line(args: argparse.Namespace) -> str:
     flags = [("cycles", args.cycles, 100), ("lengths", args.lengths, list(LENGTHS)),
              ("gamma-lengths", args.gamma_lengths, list(GAMMA_LENGTHS)), ("gammas", args.gammas, list(GAMMAS)),
              ("bonus", args.bonus, BONUS), ("paper-envs", args.paper_envs, list(ENVS))]
+    none = {"gamma-lengths": "0", "paper-envs": "none"}  # what each list flag takes for "no runs"
     shown = lambda v: ",".join(x if isinstance(x, str) else f"{x:g}" for x in v) if isinstance(v, list) else f"{v:g}"
     return f"python -m bench.fix_length --seeds {args.seeds}" + "".join(
-        f" --{name} {shown(value) or 0}" for name, value, default in flags if value != default)
+        f" --{name} {shown(value) or none[name]}" for name, value, default in flags if value != default)
 
 
 def run_steps(args: argparse.Namespace, methods: dict[str, list[str]]) -> dict:

@@ -239,3 +239,16 @@ def test_the_bench_finds_the_first_cycle_at_0_9_and_the_longest_k_solved_with_ev
     assert (row["final"], row["final_ci"], row["first"]) == (1.0, [1.0, 1.0], 2) and row["first_ci"][0] == 2
     rows = {k: {"final": final} for k, final in [(1, 1.0), (2, 0.95), (4, 0.5), (6, 0.95)]}
     assert longest_solved(rows) == 2 and longest_solved({1: {"final": 0.2}}) is None
+
+
+@pytest.mark.parametrize("argv", [["--seeds", "300-331", "--gamma-lengths", "0", "--paper-envs", "none"],
+                                  ["--seeds", "0-3", "--lengths", "1,2", "--gamma-lengths", "2", "--bonus", "0.2"]])
+def test_the_command_a_record_shows_parses_back_to_the_same_run(argv):
+    import shlex
+
+    from bench.fix_length import command_line, parse_args, record_stem
+
+    args = parse_args(argv)
+    shown = shlex.split(command_line(args))[3:]  # past "python -m bench.fix_length"
+    assert vars(parse_args(shown)) == vars(args)
+    assert record_stem(args) == ("fix_length-300-331" if args.seed_list[0] == 300 else "fix_length")
