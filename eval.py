@@ -97,7 +97,9 @@ def parse_args(argv):
                              "task 0 if none is solved)")
     parser.add_argument("--attention", action="store_true",
                         help="with a RUN of ours_learned_selection: per seed, how often the object its attention "
-                             "weighs most at a bridge decision is the one the env's fix acts on (the oracle's)")
+                             "weighs most at a bridge decision is the one the env's fix acts on (the oracle's); "
+                             "then how often that object is the nearest candidate, the distance rank of what the "
+                             "misses looked at, and the seeds that look right but fail")
     parser.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
                         help="refuse an evaluation whose plan tables are estimated to exceed this many GiB "
                              "(default: the memory available when it starts)")
@@ -184,6 +186,7 @@ def main(argv=None) -> int:
             print("attention on the fix's object, per seed: " + ", ".join(
                 f"{s} {a:.2f} of {n}" for s, a, n in zip(looked.seeds, looked.agreement, looked.decisions))
                 + f"; all {looked.overall:.2f}")
+            print(looked.diagnosis())
         draw(args, policy, episodes)
     else:
         start, bridge = time.perf_counter(), jaxbridge.hand_made(args.env, args.bridge, args.test_protocol)

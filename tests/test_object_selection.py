@@ -71,6 +71,19 @@ def test_attention_goes_only_to_objects_a_skill_can_act_on():
     assert weights[0] == 0.0 and (weights[1:] > 0).all()
 
 
+def test_distance_ranks_order_only_what_a_skill_can_act_on():
+    from jaxbridge.run.attention import RANKS, distance_rank
+
+    spec = ENV.sized_task(np.random.default_rng(0), 8, 2).__class__(8, (1, 5))
+    env = ENV.for_tasks([spec])
+    state = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))).replace(robot_x=jnp.float32(4.2))
+    states = jax.tree.map(lambda x: x[None, None], state)  # [T=1, B=1]
+    rank = distance_rank(env, states)[0, 0]
+    light, doors = 1, token_slots(env)[2:]  # at x 4.2: door 5 at 5.5, door 1 at 1.5, the light at 7.5
+    assert (rank[doors[1]], rank[doors[0]], rank[light]) == (0, 1, 2)
+    assert (np.delete(rank, [light, *doors]) == RANKS).all()  # the robot and the cells are never candidates
+
+
 def test_an_ensemble_is_members_of_their_own_whose_minimum_is_the_value():
     env, tokens = lsd(6, (1, 3), robot_cell=3)
     net = q_network(TrainConfig(approach="ours_learned_selection", q_ensemble=2, output_init="uniform"), env)
@@ -95,8 +108,9 @@ def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_l
     experiment = tmp_path / "light_switch_door"
     looked = cli_in_process("eval.py", str(experiment), "--approach", "ours_learned_selection", "--attention")
     assert looked.returncode == 0, looked.stderr
-    line = looked.stdout.splitlines()[-1]
+    line, diagnosis = looked.stdout.splitlines()[-2:]
     assert line.startswith("attention on the fix's object, per seed: 0 ") and "; all " in line
+    assert diagnosis.startswith("the fix's object is the nearest candidate at ") and "misses looked at the" in diagnosis
     refused = cli_in_process("eval.py", str(experiment / "ours_learned_selection"), str(experiment / "ours_learned_selection"),
                   "--attention")
     assert refused.returncode == 2 and "--attention reports on one RUN's evaluation" in refused.stderr
