@@ -40,13 +40,21 @@ def length_table(run: dict) -> list[str]:
 
 def longest_text(run: dict) -> str:
     """The longest k each method solves, and whether the bonus extends epsilon-greedy's by 2 or more."""
-    best = run["longest_solved"]
-    said = "; ".join(f"{m}: k = {k}" if k else f"{m}: none" for m, k in best.items())
+    best, ks = run["longest_solved"], [int(k) for k in run["oracle"]]
+
+    def said(method: str, k: int | None) -> str:
+        """k with its mean [CI], and the next k's, where the method stops."""
+        rows = run["table"][method]
+        at = lambda k: f"{final_text(rows[str(k)])} at k = {k}"
+        following = [n for n in ks if n > (k or 0)]
+        return (f"{method}: k = {k} ({at(k)}" if k else f"{method}: none (") + (
+            f"; {at(following[0])})" if following else ")")
+
+    said = "; ".join(said(m, k) for m, k in best.items())
     plain, bonus = best.get("epsilon-greedy") or 0, [k or 0 for m, k in best.items() if m != "epsilon-greedy"][0]
     verdict = (f"the count bonus extends it by {bonus - plain}" if bonus - plain >= 2 else
                f"the count bonus does not extend it by 2 or more (by {bonus - plain})")
-    longest = max(int(k) for k in run["oracle"])
-    note = f" (the longest k run: {longest}; the bonus may go further)" if bonus == longest else ""
+    note = f" (the longest k run: {max(ks)}; the bonus may go further)" if bonus == max(ks) else ""
     return (f"The longest k at which ours' mean test solve rate at cycle {run['cycles']} is at least {run['solved']}, "
             f"with every shorter k's too: {said}; {verdict}{note}.")
 
