@@ -19,11 +19,14 @@ def records_on_test_seeds():
 
 
 def on_test_seeds(step) -> bool:
-    """A record's step that ran on test seeds: a training from a test set's first seed, or an evaluation
-    of such a run (bench.training's cost steps train development seeds)."""
-    command = step.get("command", "") if isinstance(step, dict) else ""
-    first = re.search(r"--first-seed (\d+)", command)
-    return "commit" in step and (command.startswith("python eval.py") or bool(first and int(first[1]) in TEST_SETS))
+    """A record's step that ran on test seeds: a training from a test set's first seed, an evaluation of
+    such a run (bench.training's cost steps train development seeds), or a step without a command, which
+    ran in the bench command's own process on the record's seeds (bench.fix_length's)."""
+    if not isinstance(step, dict) or "commit" not in step:
+        return False
+    command = step.get("command")
+    first = re.search(r"--first-seed (\d+)", command or "")
+    return command is None or command.startswith("python eval.py") or bool(first and int(first[1]) in TEST_SETS)
 
 
 def test_every_test_seed_record_and_step_has_a_ledger_row_with_its_commit():
