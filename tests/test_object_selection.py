@@ -16,11 +16,16 @@ from run_helpers import cli_in_process, train
 ENV = env_class("light_switch_door")
 
 
-def lsd(cells: int, doors: tuple[int, ...], robot_cell: int):
-    """An LSD env, a state of one task with the robot in `robot_cell`, and its object tokens."""
+def lsd_state(cells: int, doors: tuple[int, ...], robot_x: float):
+    """An LSD env and a state of its one task with the robot at `robot_x`."""
     spec = ENV.sized_task(np.random.default_rng(0), cells, len(doors)).__class__(cells, doors)
     env = ENV.for_tasks([spec])
-    state = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))).replace(robot_x=jnp.float32(robot_cell + 0.5))
+    return env, env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))).replace(robot_x=jnp.float32(robot_x))
+
+
+def lsd(cells: int, doors: tuple[int, ...], robot_cell: int):
+    """An LSD env and the object tokens of a state of one task with the robot in `robot_cell`."""
+    env, state = lsd_state(cells, doors, robot_cell + 0.5)
     return env, object_tokens(env, state)
 
 
@@ -74,9 +79,7 @@ def test_attention_goes_only_to_objects_a_skill_can_act_on():
 def test_distance_ranks_order_only_what_a_skill_can_act_on():
     from jaxbridge.run.attention import RANKS, distance_rank
 
-    spec = ENV.sized_task(np.random.default_rng(0), 8, 2).__class__(8, (1, 5))
-    env = ENV.for_tasks([spec])
-    state = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))).replace(robot_x=jnp.float32(4.2))
+    env, state = lsd_state(8, (1, 5), robot_x=4.2)
     states = jax.tree.map(lambda x: x[None, None], state)  # [T=1, B=1]
     rank = distance_rank(env, states)[0, 0]
     light, doors = 1, token_slots(env)[2:]  # at x 4.2: door 5 at 5.5, door 1 at 1.5, the light at 7.5

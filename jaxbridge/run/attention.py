@@ -31,19 +31,22 @@ class Attention:
     @property
     def overall(self) -> float:
         """Over every such decision of every seed."""
-        total = self.decisions.sum()
-        return float(np.nansum(self.agreement * self.decisions) / total) if total else float("nan")
+        return self._over_decisions(self.agreement)
 
     def diagnosis(self) -> str:
         """eval.py --attention's second line: the premise, where misses looked, and the seeds that look right
         but fail (what the network does with the object, not which it picks)."""
-        total = self.decisions.sum()
-        near = float(np.nansum(self.nearest * self.decisions) / total) if total else float("nan")
+        near = self._over_decisions(self.nearest)
         ranks = ", ".join(f"{name} {n}" for name, n in zip(("nearest", "2nd", "3rd", "farther"), self.missed_rank))
         right_but_failing = [s for s, a, r in zip(self.seeds, self.agreement, self.solve_rate) if a >= 0.9 and r < 0.5]
         return (f"the fix's object is the nearest candidate at {near:.2f} of them; the misses looked at the "
                 f"{ranks} (by distance); seeds attending to it at 0.9 or more but solving under 0.5: "
                 + (", ".join(map(str, right_but_failing)) or "none"))
+
+    def _over_decisions(self, per_seed: np.ndarray) -> float:
+        """A per-seed fraction of decisions as the fraction of every seed's decisions together."""
+        total = self.decisions.sum()
+        return float(np.nansum(per_seed * self.decisions) / total) if total else float("nan")
 
 
 def attention_agreement(policy: TrainedPolicy, batch: TaskBatch, rollout_seed: int = 0) -> Attention:
