@@ -183,6 +183,7 @@ def parse_args(argv) -> argparse.Namespace:
         parser.error("--gamma-lengths must be among --lengths (their default discount's runs are those)")
     first, _, last = args.seeds.partition("-")
     args.seed_list = list(range(int(first), int(last or first) + 1))
+    args.on_test_seeds = any(f <= s < f + n for f, n in TEST_SETS.items() for s in args.seed_list)
     args.gamma_lengths = [k for k in args.gamma_lengths if k > 0]
     return args
 
@@ -194,7 +195,7 @@ def begin(args: argparse.Namespace) -> None:
         args.records = args.runs.resolve() / "records"
         print(f"bench.fix_length: uncommitted code: the records go to {args.records}", flush=True)
     first, count = args.seed_list[0], len(args.seed_list)
-    if any(f <= s < f + n for f, n in TEST_SETS.items() for s in args.seed_list):
+    if args.on_test_seeds:
         try:
             name = seed_set(first, count)
         except ValueError as err:
@@ -206,7 +207,7 @@ def begin(args: argparse.Namespace) -> None:
 
 def record_stem(args: argparse.Namespace) -> str:
     """The records' file name: fix_length on development seeds, fix_length-300-331 on a test-seed set."""
-    return f"fix_length-{args.seeds}" if args.seed_list[0] in TEST_SETS else "fix_length"
+    return f"fix_length-{args.seeds}" if args.on_test_seeds else "fix_length"
 
 
 def command_line(args: argparse.Namespace) -> str:

@@ -42,15 +42,14 @@ def longest_text(run: dict) -> str:
     """The longest k each method solves, and whether the bonus extends epsilon-greedy's by 2 or more."""
     best, ks = run["longest_solved"], [int(k) for k in run["oracle"]]
 
-    def said(method: str, k: int | None) -> str:
-        """k with its mean [CI], and the next k's, where the method stops."""
-        rows = run["table"][method]
-        at = lambda k: f"{final_text(rows[str(k)])} at k = {k}"
-        following = [n for n in ks if n > (k or 0)]
-        return (f"{method}: k = {k} ({at(k)}" if k else f"{method}: none (") + (
-            f"; {at(following[0])})" if following else ")")
+    def where_it_stops(method: str, longest: int | None) -> str:
+        """The longest k with its mean [CI], and the next k's."""
+        mean_at = lambda k: f"{final_text(run['table'][method][str(k)])} at k = {k}"
+        shown = [mean_at(longest)] if longest else []
+        shown += [mean_at(k) for k in ks if k > (longest or 0)][:1]
+        return f"{method}: {f'k = {longest}' if longest else 'none'} ({'; '.join(shown)})"
 
-    said = "; ".join(said(m, k) for m, k in best.items())
+    said = "; ".join(where_it_stops(m, k) for m, k in best.items())
     plain, bonus = best.get("epsilon-greedy") or 0, [k or 0 for m, k in best.items() if m != "epsilon-greedy"][0]
     verdict = (f"the count bonus extends it by {bonus - plain}" if bonus - plain >= 2 else
                f"the count bonus does not extend it by 2 or more (by {bonus - plain})")
@@ -124,6 +123,6 @@ def block(folder: Path = FOLDER) -> str:
     for path in test:
         lines += [f"**Test seeds {path.stem[len('fix_length-'):]}.**", "", *record_lines(read_json(path), folder, path.stem)]
     if dev is not None:
-        lines += ["**Development seeds.**", "", *record_lines(dev, folder, "fix_length")] if test else record_lines(
-            dev, folder, "fix_length")
+        heading = ["**Development seeds.**", ""] if test else []  # alone, the block is the development seeds'
+        lines += heading + record_lines(dev, folder, "fix_length")
     return "\n".join(lines)
