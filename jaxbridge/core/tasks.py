@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -76,6 +76,12 @@ def test_specs(env_cls: type[NoveltyEnv], seed: int, num_tasks: int = 10, protoc
     if protocol not in env_cls.test_protocols:
         raise ValueError(f"{env_cls.name} has no test protocol {protocol!r}; it has {', '.join(env_cls.test_protocols)}")
     return env_cls.test_tasks(seed, num_tasks, protocol=protocol)
+
+
+def training_specs(env_cls: type[NoveltyEnv], seeds: Sequence[int], episodes: int) -> tuple[list, list[int]]:
+    """Every seed's training tasks, one per episode of a cycle (seed-major order), and the seed each belongs to."""
+    specs = [spec for seed in seeds for spec in env_cls.train_tasks(seed, episodes)]
+    return specs, [seed for seed in seeds for _ in range(episodes)]
 
 
 def evaluation_specs(env_cls: type[NoveltyEnv], seeds: list[int], num_tasks: int = 10,

@@ -17,7 +17,7 @@ from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.episode import Controls
-from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch
+from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch, training_specs
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.exploration import with_exploration
 from jaxbridge.learn.learner import QLearner
@@ -90,8 +90,8 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     """Resolve `config` (its env by name unless `env_cls` is given, its approach)."""
     env_cls = env_cls or env_class(config.env)
     approach = get_approach(config.approach)
-    train_specs = [spec for s in config.seeds for spec in env_cls.train_tasks(s, config.episodes_per_cycle)]
-    train_env = env_cls.for_tasks(train_specs).with_quirks(config.env_quirks)
+    train_env = env_cls.for_tasks(training_specs(env_cls, config.seeds, config.episodes_per_cycle)[0]
+                                  ).with_quirks(config.env_quirks)
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
     make_learner = learner_factory(config.learner.name)
@@ -106,8 +106,7 @@ _TASKS_LOCK = threading.Lock()
 @lru_cache(maxsize=4)
 def _build_tasks(env_cls: type[NoveltyEnv], seeds: tuple[int, ...], episodes: int, train_steps: int,
                  num_test_tasks: int, test_protocol: str) -> tuple[TaskBatch, TaskBatch]:
-    train_specs = [spec for s in seeds for spec in env_cls.train_tasks(s, episodes)]
-    train_owner = [s for s in seeds for _ in range(episodes)]
+    train_specs, train_owner = training_specs(env_cls, seeds, episodes)
     train = make_batch(env_cls, train_specs, train_owner, horizons=[train_steps] * len(train_specs),
                        progress=SlowWork(f"{env_cls.name}: training tasks and plan tables"))
     return train, evaluation_batch(env_cls, list(seeds), num_test_tasks, protocol=test_protocol,
