@@ -23,14 +23,17 @@ def lsd_state(cells: int, doors: tuple[int, ...], robot_x: float):
     return env, env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))).replace(robot_x=jnp.float32(robot_x))
 
 
-def lsd(cells: int, doors: tuple[int, ...], robot_cell: int):
-    """An LSD env and the object tokens of a state of one task with the robot in `robot_cell`."""
+def lsd(cells: int, doors: tuple[int, ...], robot_cell: int, stuck_cell: int | None = None):
+    """An LSD env and the object tokens of a state of one task with the robot in `robot_cell`, stuck in
+    `stuck_cell` (there by default)."""
     env, state = lsd_state(cells, doors, robot_cell + 0.5)
-    return env, object_tokens(env, state)
+    stuck_state = state.replace(robot_x=jnp.float32((robot_cell if stuck_cell is None else stuck_cell) + 0.5))
+    return env, object_tokens(env, state, stuck_state)
 
 
-def network(env):
-    net = q_network(TrainConfig(approach="ours_learned_selection"), env)
+def network(env, **settings):
+    net = q_network(TrainConfig(approach="ours_learned_selection", **settings), env)
+
     width = len(token_slots(env)) * token_width(env)
     x = encode(env, jnp.zeros(width), jnp.int32(0), jnp.float32(0.5))
     params = net.init(jax.random.key(0), x)
@@ -47,11 +50,30 @@ def test_tokens_hold_each_real_object_and_mark_what_can_be_acted_on():
     env, tokens = lsd(6, (1, 3), robot_cell=3)
     assert list(token_slots(env)) == [0, 1, 8, 9]  # the robot, the light and the doors: cells are never acted on
     rows = np.asarray(tokens).reshape(-1, token_width(env))
-    types, interactable, x = rows[:, :4].argmax(1), rows[:, -1], rows[:, 9]
+    types, interactable, x = rows[:, :4].argmax(1), rows[:, -1], rows[:, 12]
     assert list(types) == [0, 1, 3, 3] and not rows[0, 4:].any()  # the robot first: no features, at itself
     assert list(np.flatnonzero(interactable)) == [1, 2, 3]
     assert rows[3, 4:9].tolist() == [0.0, 0.0, 0.5, 0.0, 0.75] and x[3] == 0.0  # door 1's keys and targets, here
     assert x[2] == pytest.approx(-2 / 3) and x[1] == pytest.approx(2 / 3)  # door 0 two cells back, the light two ahead
+    np.testing.assert_array_equal(rows[:, 9:12], rows[:, 12:15])  # stuck here: the offsets then are those now
+
+
+def test_tokens_keep_each_object_where_it_was_from_the_stuck_robot_and_say_how_far_it_moved():
+    env, tokens = lsd(6, (1, 3), robot_cell=1, stuck_cell=3)
+    _, stuck_here = lsd(6, (1, 3), robot_cell=3)
+    rows, then = (np.asarray(t).reshape(-1, token_width(env)) for t in (tokens, stuck_here))
+    np.testing.assert_array_equal(rows[1:, 9:12], then[1:, 9:12])  # the objects' offsets at the stall
+    assert rows[0, 9] == pytest.approx(-2 / 3) and rows[0, 12] == 0.0  # the robot: two cells back since
+    assert rows[3, 12] == pytest.approx(2 / 3) and rows[3, 9] == 0.0  # door 1 two cells ahead now, here then
+
+
+@pytest.mark.parametrize("distance, nearest", [("stall", 2), ("now", 3)])
+def test_attention_reads_the_distance_it_is_set_to(distance, nearest):
+    """Stuck beside door 0 (cell 1), the robot has walked to door 1 (cell 5): each distance has its nearest."""
+    env, tokens = lsd(8, (1, 5), robot_cell=5, stuck_cell=1)
+    net, params = network(env, attention_distance=distance)
+    weights = np.asarray(attention(net, params, tokens))
+    assert weights.argmax() == nearest and weights[nearest] > 0.9
 
 
 def test_the_network_reads_any_number_of_objects_in_any_order():

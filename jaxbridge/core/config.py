@@ -20,8 +20,9 @@ from jaxbridge.core.settings import Settings, described, setting
 # 9: `feature_noise` (older runs had none); 10: `step_gamma` (older runs had none); 11: `learner`, `q_lambda`,
 # `pqn_epochs`, `pqn_minibatches` (older runs were double DQN); 12: the learner's settings nested under
 # `learner` with its `name` (older configs were flat: a learner reads its fields from the top level, and
-# the other learner's fields, which it never read, are dropped)
-CONFIG_VERSION = 12
+# the other learner's fields, which it never read, are dropped); 13: `attention_distance`,
+# `attention_preference` (older learned selectors read the distance now, with a preference bound of 4)
+CONFIG_VERSION = 13
 NESTED_SINCE = 12
 
 
@@ -145,6 +146,8 @@ class TrainConfig(Settings):
             data = _nested(data)
         learner = dict(data.pop("learner"))
         settings = settings_class(learner["name"])
+        if version < 13 and "attention_distance" in _names(settings):
+            learner = {"attention_distance": "now", "attention_preference": 4.0, **learner}
         unknown = (set(data) - set(_OWN)) | {f"learner.{k}" for k in set(learner) - set(_names(settings))}
         if unknown:
             raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")

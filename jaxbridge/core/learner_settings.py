@@ -42,6 +42,11 @@ class Normalise(enum.StrEnum):
     MINMAX = "minmax"
 
 
+class AttentionDistance(enum.StrEnum):
+    STALL = "stall"
+    NOW = "now"
+
+
 @dataclass(frozen=True)
 class LearnerSettings(Settings):
     name: str = setting("", swept=False)
@@ -72,6 +77,14 @@ class QSettings(LearnerSettings):
     ranges) or "minmax" (the authors'): every cycle, after relabelling, each input entry is shifted by
     its minimum over the replay buffer and divided by its range (at least 1), the targets likewise; the
     network fits the scaled targets and its output is scaled back. The target network shares the scaling."""
+    attention_distance: AttentionDistance = setting(AttentionDistance.STALL, choices=AttentionDistance)
+    """Learned selection only (object tokens, learn/object_q.py): the distance that attention's penalty reads,
+    each object's from the robot where it got stuck ("stall": chosen there, as the paper's rule chooses,
+    and kept through the fix) or from the robot now ("now": it may drift to an object the fix walks past)."""
+    attention_preference: float = setting(1.0, low=0, above=True)
+    """Learned selection only: how far, in logits, what an object is may move attention against its
+    distance (a tanh bound). Learned on a training task's few objects, a larger bound lets a preference
+    override nearness among a test task's many (docs/design/approaches.md)."""
     q_ensemble: int = setting(1, low=1)
     """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     reset_optimizer: bool = False

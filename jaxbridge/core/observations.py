@@ -31,13 +31,14 @@ class Observation:
 
 
 def token_width(env: NoveltyEnv) -> int:
-    """An object token's length: one-hot type, features, position relative to the robot, interactable."""
-    return len(env.object_types) + env.object_width + POSITION_DIM + 1
+    """An object token's length: one-hot type, features, offset from the robot where it got stuck, offset
+    from the robot now, interactable."""
+    return len(env.object_types) + env.object_width + 2 * POSITION_DIM + 1
 
 
-def token_position(env: NoveltyEnv) -> tuple[int, int]:
-    """(start, end): where a token's relative position lies (after its one-hot type and features)."""
-    start = len(env.object_types) + env.object_width
+def token_position(env: NoveltyEnv, at_stall: bool) -> tuple[int, int]:
+    """(start, end): where a token's offset from the robot lies, where it got stuck (`at_stall`) or now."""
+    start = len(env.object_types) + env.object_width + (0 if at_stall else POSITION_DIM)
     return start, start + POSITION_DIM
 
 
@@ -76,13 +77,16 @@ def token_slots(env: NoveltyEnv) -> np.ndarray:
     return np.r_[0, env.candidate_slots]
 
 
-def object_tokens(env: NoveltyEnv, state: Any) -> jax.Array:
+def object_tokens(env: NoveltyEnv, state: Any, stuck_state: Any) -> jax.Array:
     """float32[T * token_width]: the object view's `token_slots` as tokens, the robot first; a masked-out
-    slot is zeros. Positions are `relative_to_robot`."""
-    objects = jax.tree.map(lambda x: x[token_slots(env)], env.objects(state))
-    kind = jax.nn.one_hot(objects.type_id, len(env.object_types)) * objects.mask[:, None]
-    relative = relative_to_robot(objects.position, objects.position[0]) * objects.mask[:, None]
-    tokens = jnp.concatenate([kind, objects.features, relative, objects.interactable[:, None].astype(jnp.float32)], -1)
+    slot is zeros. Offsets are `relative_to_robot`: each object's from the robot in the stuck state (the
+    robot's own: how far it has moved since), as the paper's rule chooses there, and from the robot now."""
+    now, then = (jax.tree.map(lambda x: x[token_slots(env)], env.objects(s)) for s in (state, stuck_state))
+    kind = jax.nn.one_hot(now.type_id, len(env.object_types)) * now.mask[:, None]
+    at_stall = relative_to_robot(then.position, then.position[0]).at[0].set(
+        relative_to_robot(now.position[0], then.position[0])) * now.mask[:, None]
+    relative = relative_to_robot(now.position, now.position[0]) * now.mask[:, None]
+    tokens = jnp.concatenate([kind, now.features, at_stall, relative, now.interactable[:, None].astype(jnp.float32)], -1)
     return tokens.reshape(-1)
 
 
@@ -92,7 +96,7 @@ FULL_STATE = Observation("full_state", lambda env: env.full_state_size,
                          lambda env, state, stuck_state: env.full_state(state), whole_state=True)
 CLOSEST_OBJECT = Observation("closest_object", closest_object_width, closest_object_features)
 OBJECT_TOKENS = Observation("object_tokens", lambda env: len(token_slots(env)) * token_width(env),
-                            lambda env, state, stuck_state: object_tokens(env, state), tokens=True)
+                            object_tokens, tokens=True)
 
 OBSERVATIONS: dict[str, Observation] = {}
 

@@ -13,7 +13,7 @@ from flax import struct
 
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
-from jaxbridge.core.learner_settings import Normalise, PolyakPer, TargetInit
+from jaxbridge.core.learner_settings import AttentionDistance, Normalise, PolyakPer, TargetInit
 from jaxbridge.core.observations import token_position, token_width
 from jaxbridge.core.signatures import signature_members, signature_shape
 from jaxbridge.learn.approaches import get_approach
@@ -137,8 +137,10 @@ def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork
                         normalise=config.normalise is Normalise.MINMAX)
     if config.normalise is not Normalise.NONE:
         raise ValueError(f"approach {config.approach} does not scale its object tokens: no normalise")
-    return ObjectQNetwork(token_width(env), env.num_skills + 2, token_position(env), config.hidden_sizes,
-                          config.activation, config.output_init, ensemble=config.q_ensemble)
+    at_stall = config.attention_distance is AttentionDistance.STALL
+    return ObjectQNetwork(token_width(env), env.num_skills + 2, token_position(env, at_stall),
+                          config.attention_preference, config.hidden_sizes, config.activation, config.output_init,
+                          ensemble=config.q_ensemble)
 
 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:

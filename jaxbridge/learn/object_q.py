@@ -2,10 +2,11 @@
 
 The paper selects the features by hand, those of the interactable object closest to the robot where it
 got stuck, and names learning that selection as the first thing to try. Here the observation is every
-object of the state as a token (`core.observations.object_tokens`: one-hot type, features, position
-relative to the robot, interactable); the robot's token asks, by attention, which interactable object
-to look at, and the Q-value is an MLP of (robot, attended object, action). Any number of objects, in
-any order: the same parameters serve the training task's few and the test tasks' many.
+object of the state as a token (`core.observations.object_tokens`: one-hot type, features, offsets
+from the robot where it got stuck and now, interactable); the robot's token asks, by attention, which
+interactable object to look at, and the Q-value is an MLP of (robot, attended object, action). Any
+number of objects, in any order: the same parameters serve the training task's few and the test tasks'
+many.
 """
 from __future__ import annotations
 
@@ -21,17 +22,17 @@ from jaxbridge.learn.q_bridge import SplitInput, UniformDense, mlp
 
 
 class ObjectAttention(nn.Module):
-    """Tokens [..., N, D] (slot 0 the robot; then `position` entries of relative position; the last entry:
-    interactable) -> (attended [..., D], weights [..., N]): the attention-weighted mean of the interactable
-    objects' tokens, a soft version of the paper's one selected object. The logits are a bounded
-    preference for what the object is, less a learned penalty per unit of distance (starting at `near`):
-    attention starts near the robot, as the paper's rule, and learns how far to look and which kinds of
-    object outweigh nearness."""
+    """Tokens [..., N, D] (slot 0 the robot; `position`: the entries of the offset its distance reads; the
+    last entry: interactable) -> (attended [..., D], weights [..., N]): the attention-weighted mean of the
+    interactable objects' tokens, a soft version of the paper's one selected object. The logits are a
+    preference for what the object is, bounded to +-`preference`, less a learned penalty per unit of
+    distance (starting at `near`): attention starts near the robot, as the paper's rule, and learns how
+    far to look and which kinds of object outweigh nearness."""
 
     keys: int  # the width of a token's key and the robot's query
-    position: slice  # where a token's relative position lies
+    position: slice
+    preference: float  # the learner's attention_preference
     near: float = 16.0
-    preference: float = 4.0
 
     @nn.compact
     def __call__(self, tokens: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -43,8 +44,7 @@ class ObjectAttention(nn.Module):
         distance = jnp.linalg.norm(tokens[..., self.position], axis=-1)
         penalty = jax.nn.softplus(self.param("near", lambda _: jnp.log(jnp.expm1(jnp.float32(self.near)))))
         # What an object is may move the attention by at most `preference` against its distance: learned on
-        # the few objects of a training task, an unbounded preference would override distance on the many of
-        # a test task, where it was never tested.
+        # the few objects of a training task, a wide preference overrides distance on the many of a test task.
         content = jnp.einsum("...nk,...k->...n", keys, query) / jnp.sqrt(self.keys)
         logits = self.preference * jnp.tanh(content / self.preference) - penalty * distance
         candidate = tokens[..., -1] > 0.5
@@ -59,14 +59,15 @@ class ObjectQMember(nn.Module):
 
     token_width: int
     action_width: int  # one-hot over the skills and CallPlanner, and the parameter
-    position: tuple[int, int]  # the token entries of the relative position
+    position: tuple[int, int]  # the token entries of the offset attention's distance reads
     hidden_sizes: Sequence[int]
     activation: str
     output_init: str
     layer_norm: bool
+    preference: float
 
     def encoder(self, **kwargs) -> ObjectAttention:
-        return ObjectAttention(max(self.hidden_sizes[0] // 4, 1), slice(*self.position), **kwargs)
+        return ObjectAttention(max(self.hidden_sizes[0] // 4, 1), slice(*self.position), self.preference, **kwargs)
 
     def tokens(self, observation: jax.Array) -> jax.Array:
         return observation.reshape(observation.shape[:-1] + (-1, self.token_width))
@@ -91,6 +92,7 @@ class ObjectQNetwork(nn.Module):
     token_width: int
     action_width: int
     position: tuple[int, int]
+    preference: float
     hidden_sizes: Sequence[int] = (32, 32)
     activation: str = "leaky_relu"
     output_init: str = "zero"
@@ -99,7 +101,7 @@ class ObjectQNetwork(nn.Module):
 
     def fields(self) -> tuple:
         return (self.token_width, self.action_width, self.position, tuple(self.hidden_sizes), self.activation,
-                self.output_init, self.layer_norm)
+                self.output_init, self.layer_norm, self.preference)
 
     @nn.compact
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
