@@ -15,7 +15,7 @@ from typing import Iterator
 
 ROOT = Path(__file__).resolve().parents[1]
 ENVS = ("light_switch_door", "doorknobs", "coffee")  # the built-in envs every record covers
-DISTRACTOR_ENVS = ("coffee_distractor",)  # variants where an object nearer the stuck robot is the wrong one (bench.selection)
+DISTRACTOR_ENVS = ("coffee_distractor", "doorknobs_distractor")  # variants where an object nearer the stuck robot is the wrong one (bench.selection)
 RECORDS = ROOT / "docs" / "results"
 QUICKSTART = RECORDS / "quickstart.json"  # bench.quickstart: the README's first command per env
 SUITE = RECORDS / "suite.json"  # bench.suite: the README's second command

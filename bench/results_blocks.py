@@ -15,7 +15,8 @@ from envs_jax import VARIANTS
 from jaxbridge.utils import stats
 
 ENV_TITLES = {"light_switch_door": "Light Switch Door", "doorknobs": "Doorknobs", "coffee": "Coffee",
-              "light_switch_panel": "Light Switch Panel", "coffee_distractor": "Coffee Distractor"}
+              "light_switch_panel": "Light Switch Panel", "coffee_distractor": "Coffee Distractor",
+              "doorknobs_distractor": "Doorknobs Distractor"}
 PRESET_RUN = "ours_authors_preset"  # the records' name for ours with --preset authors (bench.paper)
 CYCLES = (10, 25, 50, 100)
 

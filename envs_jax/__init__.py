@@ -7,7 +7,7 @@ types, `register` and `env_class` (names, envs_jax/registry.py), `envs_jax.drawi
 from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, BridgeAction, BridgeObs, NoveltyEnv,
                            NoveltySweep, Objects, SkillCall, SkillSpec, TaskSpec)
 from envs_jax.coffee import Coffee, CoffeeDistractor
-from envs_jax.doorknobs import Doorknobs
+from envs_jax.doorknobs import Doorknobs, DoorknobsDistractor
 from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchPanel
 from envs_jax.light_switch_door.sequence import LightSwitchSequence
 from envs_jax.multi_novelty import MultiNovelty
@@ -15,10 +15,11 @@ from envs_jax.registry import BUILTIN, KNOBS, VARIANTS, WORLDS, env_class, is_bu
 
 # The names in BUILTIN + VARIANTS (+ KNOBS, WORLDS); that each is its class's name is checked by tests/test_env_plugins.py
 # (tests/test_fix_length.py for KNOBS, tests/test_multi_novelty.py for WORLDS; not here: registered() also lists installed packages' entry points).
-for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel, CoffeeDistractor, LightSwitchSequence, MultiNovelty):
+for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel, CoffeeDistractor, DoorknobsDistractor, LightSwitchSequence,
+             MultiNovelty):
     register(_cls.name, _cls)
 
 __all__ = ["BUILTIN", "KNOBS", "VARIANTS", "WORLDS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
            "NoveltySweep", "Objects", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee", "LightSwitchPanel",
-           "CoffeeDistractor", "LightSwitchSequence", "MultiNovelty",
+           "CoffeeDistractor", "DoorknobsDistractor", "LightSwitchSequence", "MultiNovelty",
            "env_class", "is_builtin", "register", "registered"]

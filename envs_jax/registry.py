@@ -60,6 +60,6 @@ def is_builtin(spec: str) -> bool:
 
 
 BUILTIN = ("light_switch_door", "doorknobs", "coffee")  # the paper's envs
-VARIANTS = ("light_switch_panel", "coffee_distractor")  # ours, built to test one argument (docs/DESIGN.md says which)
+VARIANTS = ("light_switch_panel", "coffee_distractor", "doorknobs_distractor")  # ours, built to test one argument (docs/DESIGN.md says which)
 KNOBS = ("light_switch_sequence",)  # ours, with a task parameter that measures one limitation (docs/DESIGN.md)
 WORLDS = ("multi_novelty",)  # ours, built to ask one limitation's question in a world of its own (docs/DESIGN.md)

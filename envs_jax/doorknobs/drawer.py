@@ -70,4 +70,30 @@ class DoorknobsDrawer(Drawer):
                 *robot_marks(ax, trace, upto, when, ROBOT_RADIUS)]
 
 
+CLOSET = "#7e57c2"
+
+
+class DoorknobsDistractorDrawer(DoorknobsDrawer):
+    """Doorknobs' picture with each closet (inert: drawn once) as a hatched strip on its wall's face and
+    its knob as a dot; door slot d + D of the object view is door slot d's closet."""
+
+    def object_xy(self, env, trace, kind, slot, upto):
+        task = env.task_arrays(trace.spec)
+        doors = task.door_mask.shape[0]
+        if kind == "door" and slot >= doors:
+            return task.closet_knob[slot - doors]
+        return super().object_xy(env, trace, kind, slot, upto)
+
+    def draw_background(self, ax, env, trace):
+        handles = super().draw_background(ax, env, trace)
+        task = env.task_arrays(trace.spec)
+        for d in np.flatnonzero(task.closet_mask):
+            ax.plot(*task.closet_door[d].T, color=CLOSET, lw=4.0, solid_capstyle="butt", zorder=3)
+            ax.plot(*task.closet_door[d].T, color="white", lw=4.0, ls=(0, (1, 1)), solid_capstyle="butt", zorder=3)
+            ax.scatter(*task.closet_knob[d], s=14, color=CLOSET, edgecolor="black", lw=0.4, zorder=4)
+        return handles + [Line2D([], [], color=CLOSET, lw=4, marker="o", markevery=[0], markersize=4,
+                                 label="closet door and knob (leads nowhere)")]
+
+
 DRAWER = DoorknobsDrawer()
+DISTRACTOR_DRAWER = DoorknobsDistractorDrawer()

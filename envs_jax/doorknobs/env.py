@@ -119,6 +119,12 @@ def sweep_horizon(spec: DoorknobsTask) -> int:
     return max(spec.horizon, SWEEP_STEPS_PER_DOOR * spec.doors_to_goal)
 
 
+def at_slots(values: jax.Array, mask: jax.Array, at: np.ndarray, slots: int) -> jax.Array:
+    """float32[slots * k]: each row of values float32[n, k] at its 5x5 slot `at`, zeros where masked or absent."""
+    values = jnp.where(mask[..., None], values, 0.0)
+    return jnp.zeros((slots,) + values.shape[1:], jnp.float32).at[at].set(values).reshape(-1)
+
+
 @dataclass(frozen=True)
 class Doorknobs(NoveltyEnv):
     """The env at a fixed capacity: maps of at most `map_size` x `map_size` rooms."""
@@ -367,16 +373,12 @@ class Doorknobs(NoveltyEnv):
         doors = jnp.concatenate([pose, task.door_mass[:, None], task.door_friction[:, None], open_], -1)
         knobs = jnp.concatenate([pose, state.knob_rot[:, None], task.knob_target[:, None], open_], -1)
 
-        def placed(values, mask, at, slots):
-            values = jnp.where(mask[..., None], values, 0.0)
-            return jnp.zeros((slots,) + values.shape[1:], jnp.float32).at[at].set(values).reshape(-1)
-
         rooms = TEST_MAP_SIZE ** 2
         return jnp.concatenate([
-            state.robot, placed(task.room_xy, task.room_mask, room_at, rooms),
-            placed(doors, task.door_mask, door_at, 2 * rooms), placed(knobs, task.door_mask, door_at, 2 * rooms),
-            placed(task.walls, task.wall_mask, room_at, rooms),
-            placed(task.clutter, task.clutter_mask, room_at, rooms)])
+            state.robot, at_slots(task.room_xy, task.room_mask, room_at, rooms),
+            at_slots(doors, task.door_mask, door_at, 2 * rooms), at_slots(knobs, task.door_mask, door_at, 2 * rooms),
+            at_slots(task.walls, task.wall_mask, room_at, rooms),
+            at_slots(task.clutter, task.clutter_mask, room_at, rooms)])
 
     # ---- device: skills ---------------------------------------------------------------------------
     def _door_side(self, state: State, door: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
