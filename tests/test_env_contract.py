@@ -61,7 +61,7 @@ def test_env_names_resolve_to_classes_and_bad_names_say_why():
     assert env_class("examples.locked_box:LockedBox") is LockedBox
     register("tests_locked_box", lambda: LockedBox)  # a factory: the module is imported when the name is used
     assert env_class("tests_locked_box") is LockedBox and "tests_locked_box" in envs_jax.registered()
-    for spec, message in (("nowhere", "unknown env 'nowhere'; choose from coffee, coffee_distractor, doorknobs, light_switch_door"),
+    for spec, message in (("nowhere", "unknown env 'nowhere'; choose from coffee, coffee_distractor, doorknobs, doorknobs_distractor, light_switch_door"),
                           ("no_such_module:Env", "cannot import module 'no_such_module'"),
                           ("examples.locked_box:Missing", "has no attribute 'Missing'"),
                           ("tests.plugin_envs:NotAnEnv", "not a subclass of envs_jax.NoveltyEnv")):

@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_the_builtin_names_are_their_classes_names():
     classes = (envs_jax.LightSwitchDoor, envs_jax.Doorknobs, envs_jax.Coffee, envs_jax.LightSwitchPanel,
-               envs_jax.CoffeeDistractor)
+               envs_jax.CoffeeDistractor, envs_jax.DoorknobsDistractor)
     assert sorted(c.name for c in classes) == sorted(BUILTIN + VARIANTS)
     assert all(env_class(c.name) is c and is_builtin(c.name) for c in classes)
     assert set(BUILTIN + VARIANTS) <= set(envs_jax.registered())

@@ -189,6 +189,7 @@ BENCH_INSIDE = {
     "meta_policy": "env steps/s of the bare meta-policy",
     "report": "the comparison's rows (run/comparison) printed beside the authors' logged cells",
     "scaling": "seconds as the seed count grows, per seed block",
+    "stuck_objects": "the paper's selection rule at the oracle's stuck states (meta_policy.rollout)",
     "sweep": "times a --sweep's programs",
     "training": "seconds for a run's compiled programs",
     "update_parts": "where a learning step's time goes",
