@@ -19,29 +19,30 @@ from jaxbridge.utils.cli import non_negative_int, positive_int
 from jaxbridge.utils.stats import seed_range
 
 
-def stuck_picks(batch: TaskBatch) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The oracle's episodes: (solved per task, and at each stuck state the rule's pick, its type and the
-    fix's object)."""
+def stuck_picks(batch: TaskBatch) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The oracle's episodes: solved per task, and at each stuck state the rule's pick, the fix's object
+    (-1: none) and whether the two are of one type."""
     env = batch.env
     result, records = rollout(MetaPolicy(env, env.oracle_bridge), batch.arrays,
                               jax.random.split(jax.random.key(0), batch.size), batch.max_steps, record=True)
 
     def picks(state):
-        objects = env.objects(state)
+        objects, fix = env.objects(state), env.oracle_object(state)
         slot = closest_object(objects)[0]
-        return slot, objects.type_id[slot] == objects.type_id[env.oracle_object(state)], env.oracle_object(state)
+        return slot, fix, objects.type_id[slot] == objects.type_id[fix]
 
     stuck = np.asarray(records.stuck & records.live)
-    chosen, same_type, fix = (np.asarray(x)[stuck] for x in jax.vmap(jax.vmap(picks))(records.env_state))
-    return np.asarray(result.success), chosen, same_type & (fix >= 0) & (chosen != fix), fix
+    chosen, fix, same_type = (np.asarray(x)[stuck] for x in jax.vmap(jax.vmap(picks))(records.env_state))
+    return np.asarray(result.success), chosen, fix, same_type & (fix >= 0)
 
 
 def report(name: str, batch: TaskBatch) -> str:
-    solved, chosen, other_of_type, fix = stuck_picks(batch)
-    n = max(len(chosen), 1)
-    return (f"{name}: {len(chosen)} stuck states; the rule picks the fix's object at {np.sum(chosen == fix) / n:.2f} "
-            f"of them, another object of its type at {other_of_type.sum() / n:.2f} "
-            f"(the oracle solved {int(solved.sum())} of {solved.size} tasks)")
+    solved, chosen, fix, same_type = stuck_picks(batch)
+    share = lambda picked: f"{picked.sum() / max(len(chosen), 1):.2f}"
+    right = chosen == fix
+    return (f"{name}: {len(chosen)} stuck states; the rule picks the fix's object at {share(right)} of them, "
+            f"another object of its type at {share(same_type & ~right)}, of another type at "
+            f"{share(~same_type & (fix >= 0))} (the oracle solved {int(solved.sum())} of {solved.size} tasks)")
 
 
 def main() -> None:
