@@ -142,4 +142,4 @@ def test_the_closets_are_objects_of_the_door_type_that_nothing_else_sees():
 def test_doorknobs_distractor_keeps_the_env_contract():
     from jaxbridge import check_env
 
-    assert check_env(DoorknobsDistractor) is DoorknobsDistractor  # full state with the closets, the oracle on test tasks
+    assert check_env(DoorknobsDistractor) is DoorknobsDistractor  # the full state with the closets, the oracle
