@@ -81,10 +81,11 @@ class QSettings(LearnerSettings):
     """Learned selection only (object tokens, learn/object_q.py): the distance that attention's penalty reads,
     each object's from the robot where it got stuck ("stall": chosen there, as the paper's rule chooses,
     and kept through the fix) or from the robot now ("now": it may drift to an object the fix walks past)."""
-    attention_preference: float = setting(1.0, low=0, above=True)
+    attention_preference: float = setting(2.0, low=0, above=True)
     """Learned selection only: how far, in logits, what an object is may move attention against its
-    distance (a tanh bound). Learned on a training task's few objects, a larger bound lets a preference
-    override nearness among a test task's many (docs/design/approaches.md)."""
+    distance (a tanh bound). Learned on a training task's few objects, a wider bound lets a preference
+    override nearness among a test task's many; a narrower one cannot pass over a nearer decoy
+    (docs/design/approaches.md)."""
     q_ensemble: int = setting(1, low=1)
     """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     reset_optimizer: bool = False
