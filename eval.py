@@ -100,6 +100,9 @@ def parse_args(argv):
                              "weighs most at a bridge decision is the one the env's fix acts on (the oracle's); "
                              "then how often that object is the nearest candidate, the distance rank of what the "
                              "misses looked at, and the seeds that look right but fail")
+    parser.add_argument("--cycle", type=positive_int, default=None, metavar="N",
+                        help="with RUNs: evaluate the checkpoint saved after cycle N (a run keeps its latest two and "
+                             "those of train.py --keep-cycles) (default: the latest)")
     parser.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
                         help="refuse an evaluation whose plan tables are estimated to exceed this many GiB "
                              "(default: the memory available when it starts)")
@@ -121,7 +124,9 @@ def check_flags(args) -> None:
                 (args.sweep is None and len(args.runs) > 2, f"give one RUN, or two to compare side by side; got {len(args.runs)}"),
                 (len(args.runs) == 2 and drawing, "--render/--gif draw an episode of one run; give one RUN"),
                 (not args.runs and args.task_size is not None, "--task-size evaluates a trained RUN on larger tasks; give a RUN"),
-                (args.attention and len(args.runs) != 1, "--attention reports on one RUN's evaluation; give one RUN")]
+                (args.attention and len(args.runs) != 1, "--attention reports on one RUN's evaluation; give one RUN"),
+                (args.cycle is not None and (not args.runs or args.sweep is not None),
+                 "--cycle picks a trained RUN's checkpoint to evaluate; give a RUN (not with --sweep)")]
     for path, suffix, flag in ((args.render, ".png", "--render"), (args.gif, ".gif", "--gif")):
         refusals += [(path is not None and path.suffix.lower() != suffix, f"{flag} writes a {suffix[1:].upper()} image: "
                       f"give a path ending in {suffix}, got {path}"),
@@ -171,7 +176,7 @@ def main(argv=None) -> int:
     check_flags(args)
     if args.sweep is not None:
         return sweep(args)
-    policies = {str(run): jaxbridge.load(run, args.approach) for run in args.runs}
+    policies = {str(run): jaxbridge.load(run, args.approach, args.cycle) for run in args.runs}
     envs = {policy.config.env for policy in policies.values()}
     if len(envs) > 1:
         raise jaxbridge.InputError(f"side by side needs runs of one env, got {', '.join(sorted(envs))}")

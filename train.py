@@ -32,14 +32,14 @@ from pathlib import Path
 import jaxbridge
 from jaxbridge.utils import compile_cache, distributed
 from jaxbridge.utils.cli import (ArgumentParser, auto_or_positive_int, non_negative_int, positive_float, positive_int,
-                                 run_main)
+                                 positive_int_list, run_main)
 from jaxbridge.utils.interrupts import EXIT_INTERRUPTED, Interrupts, run_watched
 
 EXIT_NUMERICAL, EXIT_CANNOT_WRITE = 3, 4
 # Flags that set the run's config (flag name = TrainConfig field); --resume takes the saved config.
 CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "learner", "num_seeds", "first_seed", "cycles",
                 "episodes_per_cycle", "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus",
-                "checkpoint_every", "seed_block", "low_level_budget")
+                "checkpoint_every", "keep_cycles", "seed_block", "low_level_budget")
 DEFAULTS = jaxbridge.TrainConfig()
 
 
@@ -116,6 +116,9 @@ def parse_args(argv):
                    f"units of ours' env steps per cycle: 1 is the paper's budget (default: {d.low_level_budget})")
     p.add_argument("--checkpoint-every", type=positive_int,
                    help=f"save the learner state every N cycles and at the end (default: {d.checkpoint_every})")
+    p.add_argument("--keep-cycles", type=positive_int_list, metavar="N[,N]",
+                   help="also save the learner state after these cycles and keep it, besides the latest two "
+                        "checkpoints, for eval.py --cycle N (default: none)")
     p.add_argument("--sweep", action="append", default=None, metavar="KEY=V1,V2,...",
                    help="train every approach at each of these values of a hyperparameter (repeat for a grid: "
                         "the cartesian product), each setting its own run directory approach@KEY=V,... with a row "

@@ -371,11 +371,22 @@ def selection(env: str) -> str:
               f"selection over one of ours: {bar_text(cost_ratio(run['cost']), None, 3, 'issue 55', at_least=False)}; "
               f"its peak memory, both measured in one process: {run['steps']['cost']['peak_rss_mib']:,.0f} MiB.",
               f"* What it looks at (test tasks, greedy; `{step_command(run, 'attention')}`): "
-              f"{attention_text(run['attention'])}.",
+              f"{attention_text(run['attention'])}{over_training_text(run, last)}.",
               "", f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",
               "", f"![{ENV_TITLES[env]}, selections]({env}/selection.png)", "",
               novelty_table(env, sweep_rows, run["seeds"], step_command(run, "sweep"))]
     return "\n".join(lines)
+
+
+def over_training_text(run: dict, last: int) -> str:
+    """How attention on the fix's object changed over training (the records of `eval.py --attention --cycle N`
+    on checkpoints kept at the table's earlier cycles), and eval.py's diagnosis of the last; empty for a
+    record without them."""
+    over = run.get("attention_over_training")
+    if not over:
+        return ""
+    cycles = [f"{c} {v}" for c, v in over.items()] + [f"{last} {run['attention'].rpartition('; all ')[2]}"]
+    return f". Over training, all seeds: cycle {', '.join(cycles)}. At cycle {last}, {run['attention_diagnosis']}"
 
 
 def cost_ratio(line: str) -> float:

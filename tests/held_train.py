@@ -28,8 +28,8 @@ def main() -> None:
 
     save, first_cycle = checkpoint.save, Cycle.__call__
 
-    def save_then_hold(directory, step, state, record):
-        save(directory, step, state, record)
+    def save_then_hold(directory, step, state, record, keep=()):
+        save(directory, step, state, record, keep)
         if step == hold_after:
             hold()
 

@@ -126,9 +126,10 @@ def test_the_approach_refuses_what_its_network_does_not_have():
 
 
 def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_looks_at(tmp_path):
-    """LSD, 2 seeds x 2 cycles: the run's files, its checkpoint evaluated, and eval.py --attention's line."""
-    trained = train("--approaches", "ours_learned_selection", "--num-seeds", "2", "--cycles", "2",
-                    "--out", str(tmp_path), "--no-progress")
+    """LSD, 2 seeds x 4 cycles: the run's files, its checkpoints evaluated (the latest, and cycle 1's, kept by
+    --keep-cycles), and eval.py --attention's line."""
+    trained = train("--approaches", "ours_learned_selection", "--num-seeds", "2", "--cycles", "4",
+                    "--checkpoint-every", "1", "--keep-cycles", "1", "--out", str(tmp_path), "--no-progress")
     assert trained.returncode == 0, trained.stderr
     experiment = tmp_path / "light_switch_door"
     looked = cli_in_process("eval.py", str(experiment), "--approach", "ours_learned_selection", "--attention")
@@ -136,6 +137,11 @@ def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_l
     line, diagnosis = looked.stdout.splitlines()[-2:]
     assert line.startswith("attention on the fix's object, per seed: 0 ") and "; all " in line
     assert diagnosis.startswith("the fix's object is the nearest candidate at ") and "misses looked at the" in diagnosis
+    early = cli_in_process("eval.py", str(experiment), "--approach", "ours_learned_selection", "--attention",
+                           "--cycle", "1")
+    assert early.returncode == 0 and "cycle 1" in early.stdout and early.stdout.splitlines()[-2].startswith("attention on")
+    gone = cli_in_process("eval.py", str(experiment), "--approach", "ours_learned_selection", "--cycle", "2")
+    assert gone.returncode == 2 and "no complete checkpoint for step 2" in gone.stderr  # neither kept nor latest two
     refused = cli_in_process("eval.py", str(experiment / "ours_learned_selection"), str(experiment / "ours_learned_selection"),
                   "--attention")
     assert refused.returncode == 2 and "--attention reports on one RUN's evaluation" in refused.stderr

@@ -120,7 +120,7 @@ def test_a_save_started_while_another_is_inside_orbax_waits_for_it(tmp_path, mon
         def __exit__(self, *exc):
             real_lock.release()
 
-    def watched_save(directory, step, state, record):
+    def watched_save(directory, step, state, record, keep):
         if inside:  # a save beside another: what the lock prevents
             overlaps.append((inside[0], directory.name))
             second_waits.set()
@@ -130,7 +130,7 @@ def test_a_save_started_while_another_is_inside_orbax_waits_for_it(tmp_path, mon
             if directory.name == "first":
                 first_inside.set()
                 assert second_waits.wait(timeout=120), "the second save never tried to start"
-            real_save(directory, step, state, record)
+            real_save(directory, step, state, record, keep)
         finally:
             inside.pop()
 
@@ -244,3 +244,16 @@ def test_ctrl_c_saves_a_checkpoint_of_the_last_completed_cycle(uninterrupted, tm
     assert len(rows) == 2 * saved[0]  # the files cover exactly the completed cycles
     whole = {(r["seed"], r["cycle"]): r for r in csv.DictReader((uninterrupted / "metrics.csv").open())}
     assert all(r == whole[(r["seed"], r["cycle"])] for r in rows if int(r["cycle"]) <= 6)
+
+
+def test_kept_steps_outlive_the_latest_two_and_stay_sealed(tmp_path):
+    """train.py --keep-cycles: the steps in `keep` stay, sealed, while the latest two move on past them."""
+    state = {"w": jnp.ones((4, 3))}
+    for step in range(1, 6):
+        checkpoint.save(tmp_path, step, state, {"cycle": step}, keep=(1, 3))
+    assert checkpoint.sealed_steps(tmp_path) == [1, 3, 4, 5]
+    assert sorted(int(p.name) for p in tmp_path.iterdir() if p.name.isdigit()) == [1, 3, 4, 5]
+    for step in (1, 3):
+        checkpoint.verify(tmp_path, step)
+    with pytest.raises(checkpoint.CheckpointError, match="no complete checkpoint for step 2"):
+        checkpoint.restore(tmp_path, state, 2)

@@ -112,14 +112,14 @@ class Bridges:
 
 
 class Policy(Bridges):
-    """A run's latest checkpoint as greedy bridges, one per seed (`load`)."""
+    """A run's checkpoint as greedy bridges, one per seed (`load`): the latest, or that of `cycle`."""
 
-    def __init__(self, run_dir: str | Path):
+    def __init__(self, run_dir: str | Path, cycle: int | None = None):
         from jaxbridge.run.evaluate import load_policy
 
         self.run_dir = Path(run_dir)
         with refusing():  # a config that does not load; CheckpointError is an InputError already
-            self.trained = load_policy(self.run_dir)
+            self.trained = load_policy(self.run_dir, cycle)
         self.label = f"greedy bridge of {self.config.approach}, cycle {self.cycle}"
 
     @property
@@ -171,10 +171,11 @@ class Policy(Bridges):
             return policy_tasks(self.trained, sized, num_tasks, limit, seeds=seeds, specs=tasks)
 
 
-def load(run_dir: str | Path, approach: str | None = None) -> Policy:
+def load(run_dir: str | Path, approach: str | None = None, cycle: int | None = None) -> Policy:
     """The trained policy of a run directory (train.py's runs/ENV/APPROACH, or `train(..., out=...)`'s); an
-    experiment directory gives its `approach` run (default ours; approach@setting in a sweep)."""
-    return Policy(run_directory(Path(run_dir), approach))
+    experiment directory gives its `approach` run (default ours; approach@setting in a sweep). `cycle`: the
+    checkpoint saved after that cycle (a run keeps its latest two and those of its `keep_cycles`)."""
+    return Policy(run_directory(Path(run_dir), approach), cycle)
 
 
 def run_directory(path: Path, approach: str | None = None) -> Path:

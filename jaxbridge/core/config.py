@@ -21,7 +21,8 @@ from jaxbridge.core.settings import Settings, described, setting
 # `pqn_epochs`, `pqn_minibatches` (older runs were double DQN); 12: the learner's settings nested under
 # `learner` with its `name` (older configs were flat: a learner reads its fields from the top level, and
 # the other learner's fields, which it never read, are dropped); 13: `attention_distance`,
-# `attention_preference` (older learned selectors read the distance now, with a preference bound of 4)
+# `attention_preference` (older learned selectors read the distance now, with a preference bound of 4),
+# `keep_cycles` (older runs kept the latest two checkpoints alone)
 CONFIG_VERSION = 13
 NESTED_SINCE = 12
 
@@ -108,11 +109,17 @@ class TrainConfig(Settings):
     (`config.batch_size`) read it here."""
     checkpoint_every: int = setting(10, low=1, swept=False)
     """Save the learner state every this many cycles (and after the last one)."""
+    keep_cycles: tuple[int, ...] = setting((), swept=False)
+    """Cycles whose checkpoints are kept besides the latest two (each saved, whatever `checkpoint_every`),
+    so that `eval.py --cycle N` can evaluate the bridge as it was then."""
 
     def __post_init__(self):
         super().__post_init__()
         if len(set(self.env_quirks)) != len(self.env_quirks):
             raise ValueError(f"env_quirks names a quirk twice: {', '.join(self.env_quirks)}")
+        if any(not 1 <= c <= self.cycles for c in self.keep_cycles):
+            raise ValueError(f"keep_cycles must lie in 1..{self.cycles} (the run's cycles), got "
+                             f"{','.join(map(str, self.keep_cycles))}")
 
     def __getattr__(self, name: str):
         # Only for names TrainConfig lacks: a learner's setting read by its name, so code and runs written

@@ -35,7 +35,7 @@ class CheckpointError(InputError):
     """A checkpoint is missing, incomplete, corrupted or does not fit this run."""
 
 
-def _manager(directory: Path) -> ocp.CheckpointManager:
+def _manager(directory: Path, keep: tuple[int, ...] = ()) -> ocp.CheckpointManager:
     # Synchronous saves: a failure (no space, read-only) raises here, in the saving thread, at once, and
     # no background thread outlives it.
     # Across processes (utils/distributed.py) each process reads alone and process 0 alone writes, from
@@ -43,7 +43,9 @@ def _manager(directory: Path) -> ocp.CheckpointManager:
     alone = {"multiprocessing_options": ocp.options.MultiprocessingOptions(
         primary_host=jax.process_index(), active_processes={jax.process_index()})} if multi_process() else {}
     # orbax's create=True refuses active_processes: across processes _save makes the directory
-    options = ocp.CheckpointManagerOptions(preservation_policy=checkpoint_managers.LatestN(n=KEEP),
+    kept = checkpoint_managers.AnyPreservationPolicy([checkpoint_managers.LatestN(n=KEEP),
+                                                      checkpoint_managers.CustomSteps(steps=list(keep))])
+    options = ocp.CheckpointManagerOptions(preservation_policy=kept,
                                            create=not alone, enable_async_checkpointing=False, **alone)
     return ocp.CheckpointManager(Path(directory).absolute(), options=options)
 
@@ -62,14 +64,15 @@ def _digests(step_dir: Path) -> dict[str, str]:
 _SAVING = threading.Lock()
 
 
-def save(directory: Path, step: int, state: Any, record: dict) -> None:
-    """Save and seal checkpoint `step`; WriteError (naming the directory) if the files cannot be written."""
+def save(directory: Path, step: int, state: Any, record: dict, keep: tuple[int, ...] = ()) -> None:
+    """Save and seal checkpoint `step`, keeping the KEEP latest and those of the steps in `keep`; WriteError
+    (naming the directory) if the files cannot be written."""
     directory = Path(directory)
     if multi_process():  # orbax takes only host arrays there; PRNG keys as their words (restore wraps them)
         state = jax.tree.map(lambda x: np.asarray(jax.random.key_data(x) if is_prng_key(x) else x), state)
     with _SAVING, _quiet():
         try:
-            _save(directory, step, state, record)
+            _save(directory, step, state, record, keep)
         except (WriteError, CheckpointError):
             raise
         except Exception as err:  # noqa: BLE001 -- orbax wraps OS errors in ValueError and others
@@ -142,18 +145,19 @@ def _write_failure(err: Exception) -> str | None:
     return text.splitlines()[0][:200] if "os_error_code" in text else None
 
 
-def _save(directory: Path, step: int, state: Any, record: dict) -> None:
+def _save(directory: Path, step: int, state: Any, record: dict, keep: tuple[int, ...]) -> None:
     if multi_process():
         directory.mkdir(parents=True, exist_ok=True)  # the manager does not, across processes
     unsealed = directory / str(step)
     if unsealed.exists() and not _manifest_path(directory, step).is_file():
         shutil.rmtree(unsealed)  # a save of this step that never completed: orbax would keep its files
-    # Unseal first what this save makes orbax delete (it keeps the KEEP latest steps): a process stopped
-    # while orbax deletes a step (a third Ctrl-C) must not leave a half-deleted step with its manifest.
+    # Unseal first what this save makes orbax delete (it keeps the KEEP latest steps and those in `keep`): a
+    # process stopped while orbax deletes a step (a third Ctrl-C) must not leave a half-deleted step with its manifest.
     sealed = sealed_steps(directory)
     for old in sealed[:max(0, len(sealed) - (KEEP - 1))]:
-        _manifest_path(directory, old).unlink()
-    with _manager(directory) as mgr:
+        if old not in keep:
+            _manifest_path(directory, old).unlink()
+    with _manager(directory, keep) as mgr:
         saved = mgr.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state),
                                                        record=ocp.args.JsonSave(record)))
         mgr.wait_until_finished()

@@ -125,9 +125,10 @@ class TrainedPolicy:
         return run_bridge(batch, bridge, greedy, seed, controls)
 
 
-def load_policy(run_dir) -> TrainedPolicy:
-    """The greedy policy of a run directory's latest checkpoint (CheckpointError/ValueError if unusable)."""
-    setup, learners, step = load_learners(Path(run_dir))
+def load_policy(run_dir, cycle: int | None = None) -> TrainedPolicy:
+    """The greedy policy of a run directory's checkpoint after `cycle` (default: the latest;
+    CheckpointError/ValueError if unusable)."""
+    setup, learners, step = load_learners(Path(run_dir), cycle)
     return TrainedPolicy(setup, step, learners)
 
 

@@ -97,7 +97,7 @@ class Checkpointer:
         state = self.group.slots.unpad(done.learners)
         for i, (config, run_dir) in enumerate(self.group.written):
             checkpoint.save(run_dir / "checkpoints", len(done.histories[i]), self.group.of_run(state, i),
-                            checkpoint_record(config, done.histories[i], self.elapsed()))
+                            checkpoint_record(config, done.histories[i], self.elapsed()), keep=config.keep_cycles)
         self.saved = done.cycles
 
     def save_if_behind(self, done: Done) -> None:

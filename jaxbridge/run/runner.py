@@ -70,7 +70,7 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], hooks
             if hooks.on_cycle is not None:
                 hooks.on_cycle()
             display.cycle(c, [history[-1] for history in done.histories])
-            if c % config.checkpoint_every == 0 or c == config.cycles:
+            if c % config.checkpoint_every == 0 or c == config.cycles or c in config.keep_cycles:
                 saver.save(done)
             if hooks.widen is not None and c < config.cycles:
                 done = program.widen(done, hooks.widen, config.cycles - c)
@@ -192,11 +192,12 @@ class CycleDisplay:
             log.close()
 
 
-def load_learners(run_dir: Path) -> tuple[Setup, object, int]:
-    """A run's setup and latest learner state (with its cycle). No task is compiled: the template the
-    checkpoint is restored into needs the training env's shapes, not the tasks."""
+def load_learners(run_dir: Path, cycle: int | None = None) -> tuple[Setup, object, int]:
+    """A run's setup and learner state after `cycle` (default: its latest checkpoint), with its cycle. No
+    task is compiled: the template the checkpoint is restored into needs the training env's shapes, not
+    the tasks."""
     config = load_config(run_dir)
     check_checkpoint_belongs(config, run_dir)
     setup = make_setup(config)
-    learners, record, step = checkpoint.restore(run_dir / "checkpoints", setup.init_learners())
+    learners, record, step = checkpoint.restore(run_dir / "checkpoints", setup.init_learners(), cycle)
     return setup, learners, step

@@ -28,6 +28,14 @@ def positive_int(text: str) -> int:
     return _int_at_least(text, 1, "a positive integer")
 
 
+def positive_int_list(text: str) -> tuple[int, ...]:
+    """argparse type: comma-separated positive integers, each once, in increasing order."""
+    values = tuple(_int_at_least(part.strip(), 1, "comma-separated positive integers") for part in text.split(","))
+    if list(values) != sorted(set(values)):
+        raise argparse.ArgumentTypeError(f"expected increasing positive integers, each once, got {text!r}")
+    return values
+
+
 def non_negative_int(text: str) -> int:
     return _int_at_least(text, 0, "a non-negative integer")
 
