@@ -36,9 +36,9 @@ import jax
 import numpy as np
 
 import jaxbridge
-from bench.ledger import append, seed_set
+from bench.ledger import begin_on_seeds, on_test_seeds
 from bench.paper import Steps, write_record
-from bench.records import ENVS, RECORDS, ROOT, TEST_SETS, check_clean, git_commit, machine, refuse
+from bench.records import ENVS, RECORDS, ROOT, check_clean, git_commit, machine
 from jaxbridge.utils import stats
 
 ENV = "light_switch_sequence"
@@ -183,26 +183,16 @@ def parse_args(argv) -> argparse.Namespace:
         parser.error("--gamma-lengths must be among --lengths (their default discount's runs are those)")
     first, _, last = args.seeds.partition("-")
     args.seed_list = list(range(int(first), int(last or first) + 1))
-    args.on_test_seeds = any(f <= s < f + n for f, n in TEST_SETS.items() for s in args.seed_list)
+    args.on_test_seeds = on_test_seeds(args.seed_list)
     args.gamma_lengths = [k for k in args.gamma_lengths if k > 0]
     return args
 
 
 def begin(args: argparse.Namespace) -> None:
     """Refuse dirty code without --allow-dirty; on a test-seed set, its ledger row first."""
-    changed = check_clean("bench.fix_length", args.allow_dirty)
-    if changed:
+    if begin_on_seeds("bench.fix_length", ENV, args.seed_list, command_line(args), args):
         args.records = args.runs.resolve() / "records"
         print(f"bench.fix_length: uncommitted code: the records go to {args.records}", flush=True)
-    first, count = args.seed_list[0], len(args.seed_list)
-    if args.on_test_seeds:
-        try:
-            name = seed_set(first, count)
-        except ValueError as err:
-            refuse(f"bench.fix_length: {err}")
-        if not (args.change and args.chosen_on):
-            refuse("bench.fix_length: a run on test seeds needs --change and --chosen-on (its ledger row)")
-        append(name, ENV, command_line(args), args.change, args.chosen_on, git_commit(changed))
 
 
 def record_stem(args: argparse.Namespace) -> str:

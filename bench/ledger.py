@@ -17,7 +17,7 @@ import csv
 import datetime
 import sys
 
-from bench.records import RECORDS, TEST_SETS, git_commit
+from bench.records import RECORDS, TEST_SETS, check_clean, git_commit, refuse
 
 LEDGER = RECORDS / "ledger.csv"
 FIELDS = ("date", "seeds", "env", "ran", "commit", "change", "chosen_on")
@@ -51,6 +51,27 @@ def seed_set(first: int, count: int) -> str:
         known = ", ".join(f"{f}-{f + n - 1}" for f, n in TEST_SETS.items())
         raise ValueError(f"seeds {first}-{first + count - 1} are not within a test-seed set ({known})")
     return f"{first}-{first + count - 1}"
+
+
+def on_test_seeds(seeds: list[int]) -> bool:
+    """Whether any of `seeds` lies in a test-seed set."""
+    return any(first <= s < first + size for first, size in TEST_SETS.items() for s in seeds)
+
+
+def begin_on_seeds(module: str, env: str, seeds: list[int], command: str, args: argparse.Namespace) -> bool:
+    """Before a bench command that runs on development or test seeds does any work: refuse dirty code
+    without args.allow_dirty (exit 2); on a test-seed set, refuse a run without args.change and
+    args.chosen_on and append its ledger row. Returns whether the code has uncommitted changes."""
+    changed = check_clean(module, args.allow_dirty)
+    if on_test_seeds(seeds):
+        try:
+            name = seed_set(seeds[0], len(seeds))
+        except ValueError as err:
+            refuse(f"{module}: {err}")
+        if not (args.change and args.chosen_on):
+            refuse(f"{module}: a run on test seeds needs --change and --chosen-on (its ledger row)")
+        append(name, env, command, args.change, args.chosen_on, git_commit(changed))
+    return bool(changed)
 
 
 def add_reason_flags(parser: argparse.ArgumentParser) -> None:

@@ -219,6 +219,12 @@ def sweep_table(env: str) -> str:
             + f"\n![{ENV_TITLES[env]}, generalisation](./{env}/sweep.png)\n")
 
 
+def seeds_label(seeds: str) -> str:
+    """"test seeds 300-331" or "development seeds 0-7": a record's seeds (FIRST-LAST) with what they are."""
+    from bench.ledger import on_test_seeds
+    return f"{'test' if on_test_seeds([int(seeds.partition('-')[0])]) else 'development'} seeds {seeds}"
+
+
 def novelty_table(env: str, sweep_rows: list[dict], seeds: str, command: str) -> str:
     """Solve rate per novelty count (rows) and line (columns) of a sweep.csv: mean [95% CI] over seeds."""
     counted = counted_column(sweep_rows)
@@ -229,7 +235,7 @@ def novelty_table(env: str, sweep_rows: list[dict], seeds: str, command: str) ->
     counts = sorted(next(iter(lines_by_label.values())))
     tasks = sweep_rows[0]["tasks"]
     sweep = jaxbridge.load_env(env).novelty_sweep
-    out = [f"The number of {sweep.counted} {sweep.setting}: the final bridges of test seeds {seeds}, "
+    out = [f"The number of {sweep.counted} {sweep.setting}: the final bridges of {seeds_label(seeds)}, "
            f"{tasks} tasks per count and seed; mean [95% CI] over seeds (`{command}`).", "",
            f"| {counted.replace('_', ' ')} | " + " | ".join(lines_by_label) + " |", "|---|" + "---|" * len(lines_by_label)]
     for k in counts:

@@ -111,3 +111,22 @@ def test_the_ledger_command_appends_a_row_and_refuses_seeds_outside_the_sets(own
     assert (row["seeds"], row["commit"], row["chosen_on"]) == ("300-331", "abc", "development seeds 0-31")
     assert ledger.main(["--env", "doorknobs", "--ran", "x", "--first-seed", "100", *REASON]) == 2
     assert "not within a test-seed set" in capsys.readouterr().err and len(ledger.rows()) == 1
+
+
+def test_a_command_on_development_or_test_seeds_writes_a_row_only_for_a_test_set(own_ledger, monkeypatch, capsys):
+    """bench.multi_novelty and bench.fix_length (`ledger.begin_on_seeds`): development seeds leave the ledger
+    alone; test seeds need their reasons, and a range leaving its set is refused."""
+    from bench import multi_novelty
+    monkeypatch.setattr(records, "uncommitted", lambda: [])
+    begin = lambda *flags: ledger.begin_on_seeds("bench.multi_novelty", "multi_novelty", (a := multi_novelty.parse(
+        list(flags))).seed_list, multi_novelty.command_line(a), a)
+    assert begin("--seeds", "0-7") is False and not own_ledger.exists()
+    for flags, message in ((("--seeds", "300-301"), "needs --change and --chosen-on"),
+                           (("--seeds", "330-333", *REASON), "not within a test-seed set")):
+        with pytest.raises(SystemExit) as refused:
+            begin(*flags)
+        assert refused.value.code == 2 and message in capsys.readouterr().err and not own_ledger.exists()
+    begin("--seeds", "300-331", "--cycles", "50", *REASON)
+    (row,) = ledger.rows()
+    assert (row["seeds"], row["env"], row["ran"]) == ("300-331", "multi_novelty",
+                                                      "python -m bench.multi_novelty --seeds 300-331 --cycles 50")
