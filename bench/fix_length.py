@@ -36,9 +36,9 @@ import jax
 import numpy as np
 
 import jaxbridge
-from bench.ledger import begin_on_seeds, on_test_seeds
+from bench.ledger import add_seed_run_flags, begin_on_seeds, on_test_seeds, seed_list
 from bench.paper import Steps, write_record
-from bench.records import ENVS, RECORDS, ROOT, check_clean, git_commit, machine
+from bench.records import ENVS, ROOT, check_clean, git_commit, machine
 from jaxbridge.utils import stats
 
 ENV = "light_switch_sequence"
@@ -173,16 +173,11 @@ def parse_args(argv) -> argparse.Namespace:
                         help="the paper's envs, each trained with and without the bonus (default: all three; none)")
     parser.add_argument("--bonus", type=float, default=BONUS, help="count_bonus of the exploration rows (default: %(default)s)")
     parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "fix_length", help="its finished steps (default: runs/fix_length)")
-    parser.add_argument("--records", type=Path, default=RECORDS, help="where the records go (default: docs/results)")
-    parser.add_argument("--allow-dirty", action="store_true",
-                        help="run on code with uncommitted changes (a local try): the records go to RUNS/records")
-    parser.add_argument("--change", help="a test-seed run's ledger row: what changed since the set's previous run")
-    parser.add_argument("--chosen-on", help="a test-seed run's ledger row: the seeds the change was chosen on")
+    add_seed_run_flags(parser)
     args = parser.parse_args(argv)
     if not set(args.gamma_lengths) <= set(args.lengths) | {0}:
         parser.error("--gamma-lengths must be among --lengths (their default discount's runs are those)")
-    first, _, last = args.seeds.partition("-")
-    args.seed_list = list(range(int(first), int(last or first) + 1))
+    args.seed_list = seed_list(args.seeds)
     args.on_test_seeds = on_test_seeds(args.seed_list)
     args.gamma_lengths = [k for k in args.gamma_lengths if k > 0]
     return args
@@ -190,9 +185,7 @@ def parse_args(argv) -> argparse.Namespace:
 
 def begin(args: argparse.Namespace) -> None:
     """Refuse dirty code without --allow-dirty; on a test-seed set, its ledger row first."""
-    if begin_on_seeds("bench.fix_length", ENV, args.seed_list, command_line(args), args):
-        args.records = args.runs.resolve() / "records"
-        print(f"bench.fix_length: uncommitted code: the records go to {args.records}", flush=True)
+    begin_on_seeds("bench.fix_length", ENV, args.seed_list, command_line(args), args)
 
 
 def record_stem(args: argparse.Namespace) -> str:

@@ -16,6 +16,7 @@ import argparse
 import csv
 import datetime
 import sys
+from pathlib import Path
 
 from bench.records import RECORDS, TEST_SETS, check_clean, git_commit, refuse
 
@@ -58,11 +59,30 @@ def on_test_seeds(seeds: list[int]) -> bool:
     return any(first <= s < first + size for first, size in TEST_SETS.items() for s in seeds)
 
 
+def seed_list(text: str) -> list[int]:
+    """FIRST-LAST (or one seed) as the list of its seeds."""
+    first, _, last = text.partition("-")
+    return list(range(int(first), int(last or first) + 1))
+
+
+def add_seed_run_flags(parser: argparse.ArgumentParser) -> None:
+    """The flags of a bench command that runs on development or test seeds (`begin_on_seeds`)."""
+    parser.add_argument("--records", type=Path, default=RECORDS, help="where the records go (default: docs/results)")
+    parser.add_argument("--allow-dirty", action="store_true",
+                        help="run on code with uncommitted changes (a local try): the records go to RUNS/records")
+    parser.add_argument("--change", help="a test-seed run's ledger row: what changed since the set's previous run")
+    parser.add_argument("--chosen-on", help="a test-seed run's ledger row: the seeds the change was chosen on")
+
+
 def begin_on_seeds(module: str, env: str, seeds: list[int], command: str, args: argparse.Namespace) -> bool:
     """Before a bench command that runs on development or test seeds does any work: refuse dirty code
-    without args.allow_dirty (exit 2); on a test-seed set, refuse a run without args.change and
-    args.chosen_on and append its ledger row. Returns whether the code has uncommitted changes."""
+    without args.allow_dirty (exit 2), else point args.records at RUNS/records for it; on a test-seed set,
+    refuse a run without args.change and args.chosen_on and append its ledger row. Returns whether the code
+    has uncommitted changes."""
     changed = check_clean(module, args.allow_dirty)
+    if changed:
+        args.records = args.runs.resolve() / "records"
+        print(f"{module}: uncommitted code: the records go to {args.records}", flush=True)
     if on_test_seeds(seeds):
         try:
             name = seed_set(seeds[0], len(seeds))

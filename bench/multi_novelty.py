@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 
 import jaxbridge
-from bench.ledger import begin_on_seeds, on_test_seeds
+from bench.ledger import add_seed_run_flags, begin_on_seeds, on_test_seeds, seed_list
 from bench.paper import Steps, csv_text, results_rows, train_step, write_record, write_run_records
-from bench.records import RECORDS, ROOT, check_clean, git_commit, machine, run_child, shown
+from bench.records import ROOT, check_clean, git_commit, machine, run_child, shown
 from jaxbridge.utils.files import write_atomic
 from jaxbridge.utils.stats import bootstrap_ci
 
@@ -76,14 +76,9 @@ def parse(argv) -> argparse.Namespace:
     parser.add_argument("--cost-cycles", type=int, default=10, help="cycles of the cost step (default: %(default)s)")
     parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "multi_novelty",
                         help="where the runs and finished steps go (default: runs/multi_novelty)")
-    parser.add_argument("--records", type=Path, default=RECORDS, help="where the records go (default: docs/results)")
-    parser.add_argument("--allow-dirty", action="store_true",
-                        help="run on code with uncommitted changes (a local try): the records go to RUNS/records")
-    parser.add_argument("--change", help="a test-seed run's ledger row: what changed since the set's previous run")
-    parser.add_argument("--chosen-on", help="a test-seed run's ledger row: the seeds the change was chosen on")
+    add_seed_run_flags(parser)
     args = parser.parse_args(argv)
-    first, _, last = args.seeds.partition("-")
-    args.seed_list = list(range(int(first), int(last or first) + 1))
+    args.seed_list = seed_list(args.seeds)
     args.stem = f"{ENV}-{args.seeds}" if on_test_seeds(args.seed_list) else ENV
     return args
 
@@ -97,9 +92,7 @@ def command_line(args: argparse.Namespace) -> str:
 
 def main(argv=None) -> int:
     args = parse(argv)
-    if begin_on_seeds("bench.multi_novelty", ENV, args.seed_list, command_line(args), args):
-        args.records = args.runs.resolve() / "records"
-        print(f"bench.multi_novelty: uncommitted code: the records go to {args.records}", flush=True)
+    begin_on_seeds("bench.multi_novelty", ENV, args.seed_list, command_line(args), args)
     names = args.approaches.split(",") if args.approaches else jaxbridge.default_approaches(jaxbridge.load_env(ENV))
     runs, start = args.runs.resolve(), time.perf_counter()
     runs.mkdir(parents=True, exist_ok=True)
