@@ -70,9 +70,11 @@ def parse_args(argv):
                              "random: a uniformly random applicable action whenever stuck; none: pure planning "
                              "(re-plan whenever stuck) (default: %(default)s)")
     parser.add_argument("--test-protocol", default=None, metavar="NAME",
-                        help="with --bridge: which of the env's test-task distributions, e.g. jaxbridge (Coffee: 1-4 "
-                             "cups, horizon 110) or authors (Coffee: 4 cups, horizon 100; Light Switch Door: horizon "
-                             "30) (default: the one train.py trains on; a RUN's is its own)")
+                        help="which of the env's test-task distributions to evaluate on, e.g. jaxbridge (Coffee: 1-4 "
+                             "cups, horizon 110), authors (Coffee: 4 cups, horizon 100; Light Switch Door: horizon "
+                             "30) or held_out (multi_novelty: kinds combined as no training task combines them); "
+                             "with a RUN: its seeds' test tasks under it (default: the one train.py trains on; a "
+                             "RUN's is its own)")
     parser.add_argument("--num-seeds", type=positive_int, default=8,
                         help="evaluate the test tasks of seeds first-seed .. first-seed+N-1 (default: %(default)s)")
     parser.add_argument("--first-seed", type=non_negative_int, default=0, help="first seed (default: %(default)s)")
@@ -125,6 +127,8 @@ def check_flags(args) -> None:
                 (len(args.runs) == 2 and drawing, "--render/--gif draw an episode of one run; give one RUN"),
                 (not args.runs and args.task_size is not None, "--task-size evaluates a trained RUN on larger tasks; give a RUN"),
                 (args.attention and len(args.runs) != 1, "--attention reports on one RUN's evaluation; give one RUN"),
+                (args.test_protocol is not None and args.runs and (args.sweep is not None or args.task_size is not None),
+                 "--test-protocol picks a RUN's test tasks; it does not combine with --sweep or --task-size"),
                 (args.cycle is not None and (not args.runs or args.sweep is not None),
                  "--cycle picks a trained RUN's checkpoint to evaluate; give a RUN (not with --sweep)")]
     for path, suffix, flag in ((args.render, ".png", "--render"), (args.gif, ".gif", "--gif")):
@@ -140,9 +144,9 @@ def evaluate(args, policy: jaxbridge.Policy) -> jaxbridge.Episodes:
     """A run's latest checkpoint on its test tasks or --task-size tasks, with a header line."""
     start = time.perf_counter()
     episodes = policy.evaluate(task_size=args.task_size, num_tasks=args.num_tasks, rollout_seed=args.rollout_seed,
-                               max_memory=args.max_memory)
+                               max_memory=args.max_memory, test_protocol=args.test_protocol)
     what = (f"{args.num_tasks} tasks per seed of " + ", ".join(f"{k} {v}" for k, v in args.task_size.items())
-            if args.task_size else "test tasks")
+            if args.task_size else "test tasks" + (f" ({args.test_protocol} protocol)" if args.test_protocol else ""))
     print(f"{policy.run_dir}: {policy.config.env}, {policy.config.approach}, checkpoint of cycle {policy.cycle}, "
           f"greedy bridge, {what} ({time.perf_counter() - start:.1f} s including compilation)")
     return episodes

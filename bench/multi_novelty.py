@@ -7,11 +7,12 @@
 Steps, each as a user runs it (child processes; wall time and peak memory recorded; a finished step is
 not run again, and training resumes from its checkpoints):
   1. train.py --env multi_novelty (its default approaches, or --approaches) on the seeds: the test tasks;
-  2. the same with --test-protocol held_out: the held-out combinations (doors with both locks);
-  3. eval.py RUN --sweep novelties: the final bridges on more and more novelties;
-  4. each approach's final bridges on tasks holding one kind alone (KIND_TASKS per kind, the same for
-     every seed): which kinds it solves;
-  5. python -m bench.training: seconds per cycle of each learned approach, one after another in one
+  2. eval.py RUN --sweep novelties: the final bridges on more and more novelties;
+  3. each approach's final bridges on each seed's held-out combinations (eval.py RUN --test-protocol
+     held_out: doors with both locks; the training does not depend on the test tasks, so the bridges are
+     those a run testing on them would train) and on tasks holding one kind alone (KIND_TASKS per kind,
+     the same for every seed): which kinds it solves;
+  4. python -m bench.training: seconds per cycle of each learned approach, one after another in one
      process, as a ratio to ours'.
 Writes into docs/results/multi_novelty/ (on a test-seed set its ledger row first; code with uncommitted
 changes is refused without --allow-dirty): STEM.csv, STEM_seeds.csv, STEM.png, STEM_sweep.csv/png (the
@@ -23,6 +24,7 @@ docs/results/multi_novelty.md.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from pathlib import Path
@@ -31,13 +33,12 @@ import numpy as np
 
 import jaxbridge
 from bench.ledger import add_seed_run_flags, begin_on_seeds, on_test_seeds, seed_list
-from bench.paper import Steps, csv_text, results_rows, train_step, write_record, write_run_records
+from bench.paper import Steps, csv_text, train_step, write_record, write_run_records
 from bench.records import ROOT, check_clean, git_commit, machine, run_child, shown
 from jaxbridge.utils.files import write_atomic
 from jaxbridge.utils.stats import bootstrap_ci
 
 ENV = "multi_novelty"
-PROTOCOLS = {"test": "jaxbridge", "held_out": "held_out"}
 KIND_TASKS = 8  # tasks per kind alone, the same for every seed
 NOT_LEARNED = ("random", "pure_planning")  # no cycle cost to compare
 
@@ -53,17 +54,22 @@ def kind_tasks() -> dict[str, list]:
     return tasks
 
 
-def kind_rows(run: Path, approaches: list[str]) -> list[dict]:
-    """Each approach's final greedy bridges on each kind alone: the fraction solved, mean [95% CI] over seeds."""
-    rows = []
+def summary_row(episodes: jaxbridge.Episodes, **what) -> dict:
+    """The fraction of tasks solved per seed as mean [95% CI] over seeds, after `what` names the cell."""
+    per_seed = np.array(list(episodes.per_seed().values()))
+    low, high = bootstrap_ci(per_seed)
+    return {**what, "seeds": len(per_seed), "mean": f"{per_seed.mean():.3f}", "low": f"{float(low):.3f}",
+            "high": f"{float(high):.3f}"}
+
+
+def final_rows(run: Path, approaches: list[str]) -> tuple[list[dict], list[dict]]:
+    """Each approach's final greedy bridges on its seeds' held-out combinations, and on each kind alone."""
+    held_out, kinds = [], []
     for name in approaches:
         policy = jaxbridge.load(run, name)
-        for kind, specs in kind_tasks().items():
-            per_seed = np.array(list(policy.evaluate(tasks=specs).per_seed().values()))
-            low, high = bootstrap_ci(per_seed)
-            rows.append({"approach": name, "kind": kind, "seeds": len(per_seed), "mean": f"{per_seed.mean():.3f}",
-                         "low": f"{float(low):.3f}", "high": f"{float(high):.3f}"})
-    return rows
+        held_out.append(summary_row(policy.evaluate(test_protocol="held_out"), approach=name, cycle=policy.cycle))
+        kinds += [summary_row(policy.evaluate(tasks=specs), approach=name, kind=kind) for kind, specs in kind_tasks().items()]
+    return held_out, kinds
 
 
 def parse(argv) -> argparse.Namespace:
@@ -99,24 +105,24 @@ def main(argv=None) -> int:
     steps = Steps(runs / f"{args.stem}-steps.json")
     flags = ["--env", ENV, "--approaches", ",".join(names), "--first-seed", str(args.seed_list[0]), "--num-seeds",
              str(len(args.seed_list)), "--cycles", str(args.cycles), "--no-progress"]
-    run = {p: runs / f"{args.stem}-{p}" for p in PROTOCOLS}
-    trained = {p: steps.run(f"train_{p}", lambda p=p: train_step(run[p], flags + ["--test-protocol", PROTOCOLS[p]]))
-               for p in PROTOCOLS}
-    sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run["test"]), "--sweep", "novelties"]))
-    kinds = kind_rows(run["test"], names)
+    run = runs / f"{args.stem}-test"
+    trained = steps.run("train", lambda: train_step(run, flags))
+    sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
+    held_out, kinds = final_rows(run, names)
     learned = ["ours"] + [n for n in names if n not in NOT_LEARNED and n != "ours"]
     cost = steps.run("cost", lambda: run_child(["python", "-m", "bench.training", "--env", ENV, "--num-seeds",
                                                 str(min(len(args.seed_list), 8)), "--cycles", str(args.cost_cycles),
                                                 "--approach", ",".join(learned)], keep_stdout=True))
     check_clean("bench.multi_novelty", args.allow_dirty, during=True)
     out = args.records / ENV
-    write_run_records(run["test"], out, args.stem)
-    write_atomic(out / f"{args.stem}_held_out.csv", csv_text(results_rows(run["held_out"])))
+    write_run_records(run, out, args.stem)
+    write_atomic(out / f"{args.stem}_held_out.csv", csv_text(held_out))
     write_atomic(out / f"{args.stem}_kinds.csv", csv_text(kinds))
     record = {"env": ENV, "commit": git_commit(), "command": command_line(args), "seeds": args.seeds,
-              "cycles": args.cycles, "approaches": names, "protocols": PROTOCOLS,
+              "cycles": args.cycles, "approaches": names,
               "cost": [line for line in cost["stdout"].splitlines() if "x ours'" in line],
-              "steps": {**{f"train_{p}": step for p, step in trained.items()}, "sweep": sweep,
+              "schedule": json.loads((run / "schedule.json").read_text()),  # each core's busy seconds
+              "steps": {"train": trained, "sweep": sweep,
                         "cost": {k: v for k, v in cost.items() if k != "stdout"}},
               "wall_s": round(time.perf_counter() - start, 1), "machine": machine()}
     return write_record(out / f"{args.stem}.json", record, start)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from bench.performance_blocks import busy_text
 from bench.records import RECORDS
 from bench.results_blocks import (approach_row, bar_text, by_approach, commit_text, cost_ratio, label, machine_text,
                                   novelty_table, read_csv, read_json, seeds_label, step_command, table_header)
@@ -14,22 +15,27 @@ ENV = "multi_novelty"
 FOLDER = RECORDS / ENV
 BARS = {"test": 0.9, "held_out": 0.8}  # issue 54: the mean test solve rate at the last cycle, per protocol
 COST_BAR = 3.0  # issue 54: no approach of the default over 3x ours per cycle
+IDLE_BAR = 1.1  # issue 54: the training's wall over the approaches' summed seconds per core
 ONE_BRIDGE = ("ours", "ours_learned_selection")  # one bridge for every kind
 
 
-def final(rows: dict[str, dict[int, dict]], name: str, last: int) -> tuple[float, tuple[float, float]]:
-    row = rows[name][last]
-    return (float(row["test_solve_rate_mean"]),
-            (float(row["test_solve_rate_mean_low"]), float(row["test_solve_rate_mean_high"])))
+def cell(row: dict) -> tuple[float, tuple[float, float]]:
+    """A summary row's mean and 95% CI (bench.multi_novelty.summary_row)."""
+    return float(row["mean"]), (float(row["low"]), float(row["high"]))
 
 
-def bars_lines(test: dict, held_out: dict, last: int) -> list[str]:
-    """Each learned approach's last-cycle solve rate on both sets against its bar, and which meet both."""
+def bars_lines(test: dict, held_out: list[dict], last: int) -> list[str]:
+    """Each learned approach's last-cycle solve rate on the test tasks and the held-out combinations against
+    their bars, and which meet both."""
+    held = {row["approach"]: row for row in held_out}
     learned = [n for n in test if n not in ("random", "pure_planning")]
-    lines = ["| approach | test tasks, cycle " + f"{last} | held-out combinations, cycle {last} |", "|---|---|---|"]
+    lines = [f"| approach | test tasks, cycle {last} | held-out combinations, cycle {last} |", "|---|---|---|"]
     meets = []
     for name in learned:
-        (t, t_ci), (h, h_ci) = final(test, name, last), final(held_out, name, last)
+        row = test[name][last]
+        t, t_ci = float(row["test_solve_rate_mean"]), (float(row["test_solve_rate_mean_low"]),
+                                                        float(row["test_solve_rate_mean_high"]))
+        h, h_ci = cell(held[name])
         lines.append(f"| {label(name)} | {bar_text(t, t_ci, BARS['test'], 'issue 54')} | "
                      f"{bar_text(h, h_ci, BARS['held_out'], 'issue 54')} |")
         if t >= BARS["test"] and h >= BARS["held_out"]:
@@ -42,33 +48,38 @@ def bars_lines(test: dict, held_out: dict, last: int) -> list[str]:
     return lines + ["", answer]
 
 
-def kinds_table(rows: list[dict]) -> list[str]:
-    """Each approach's final bridges on tasks holding one kind alone: mean [95% CI] over seeds."""
-    kinds = list(dict.fromkeys(r["kind"] for r in rows))
+def final_table(rows: list[dict], column: str) -> list[str]:
+    """Each approach's final bridges on each `column` value's tasks: mean [95% CI] over seeds."""
+    values = list(dict.fromkeys(r[column] for r in rows))
     cells: dict[str, dict[str, str]] = {}
     for r in rows:
-        cells.setdefault(r["approach"], {})[r["kind"]] = f"{float(r['mean']):.2f} [{float(r['low']):.2f}, {float(r['high']):.2f}]"
-    return (["| approach | " + " | ".join(kinds) + " |", "|---|" + "---|" * len(kinds)]
-            + [f"| {label(name)} | " + " | ".join(by_kind[k] for k in kinds) + " |" for name, by_kind in cells.items()])
+        mean, (low, high) = cell(r)
+        cells.setdefault(r["approach"], {})[r[column]] = f"{mean:.2f} [{low:.2f}, {high:.2f}]"
+    return (["| approach | " + " | ".join(values) + " |", "|---|" + "---|" * len(values)]
+            + [f"| {label(name)} | " + " | ".join(by[v] for v in values) + " |" for name, by in cells.items()])
 
 
 def cost_lines(run: dict) -> list[str]:
-    """bench.training's ratios to ours, each against the bar."""
+    """bench.training's ratios to ours, each against the bar; then the training's idle cores."""
+    busy = run["schedule"]["busy_s"]
+    idle = run["schedule"]["wall_s"] / (sum(busy.values()) / len(busy))
     return [f"* {line.split(':')[0]}: {bar_text(cost_ratio(line), None, COST_BAR, 'issue 54', at_least=False)}"
-            for line in run["cost"]]
+            for line in run["cost"]] + [
+        f"* the training's wall time over its approaches' summed seconds per core (each core busy: {busy_text(run)}): "
+        + bar_text(idle, None, IDLE_BAR, "issue 54", at_least=False)]
 
 
 def record_lines(run: dict, folder: Path, stem: str) -> list[str]:
     test, last = by_approach(read_csv(folder / f"{stem}.csv"))
-    held_out, _ = by_approach(read_csv(folder / f"{stem}_held_out.csv"))
+    held_out = read_csv(folder / f"{stem}_held_out.csv")
     lines = [f"{seeds_label(run['seeds']).capitalize()}, {last} cycles; each cell: mean [95% CI] over seeds, IQM "
              "[95% CI] beside it.", "", "Test tasks:", "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in test.items()]
-    lines += ["", "Held-out combinations (`--test-protocol held_out`: kinds mixed as no training task mixes them):", "",
-              *table_header(last), *[approach_row(name, cycles, last) for name, cycles in held_out.items()]]
-    lines += ["", "The bars, at the last cycle:", "", *bars_lines(test, held_out, last)]
+    lines += ["", f"The bars, at cycle {last} (the held-out combinations: each seed's `--test-protocol held_out` tasks, "
+              "kinds mixed as no training task mixes them, met by the final bridges; `eval.py RUN --test-protocol "
+              "held_out`):", "", *bars_lines(test, held_out, last)]
     lines += ["", "Each kind alone (tasks holding one kind, the same for every seed; the final bridges):", "",
-              *kinds_table(read_csv(folder / f"{stem}_kinds.csv"))]
+              *final_table(read_csv(folder / f"{stem}_kinds.csv"), "kind")]
     lines += ["", f"Cost per cycle against ours', one timing run in one process (`{run['steps']['cost']['command']}`):",
               *cost_lines(run)]
     lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",

@@ -117,6 +117,27 @@ def test_eval_loads_the_checkpoint(short_run):
     assert "25 cells, 5 doors" in bigger.stdout
 
 
+def test_eval_takes_a_runs_seeds_test_tasks_under_another_protocol(short_run):
+    """The run trained with --preset authors (horizon 30); --test-protocol jaxbridge evaluates the same
+    checkpoints on the same seeds' tasks under the paper's horizons, as train.py would have drawn them."""
+    import jaxbridge
+    from jaxbridge.core.tasks import evaluation_specs
+
+    policy = jaxbridge.load(short_run[0])
+    own, other = policy.tasks(), policy.tasks(test_protocol="jaxbridge")
+    specs, _ = evaluation_specs(jaxbridge.load_env("light_switch_door"), [0, 1], 10, "jaxbridge")
+    assert other.specs == specs and other.seeds.tolist() == own.seeds.tolist()
+    assert other.arrays.horizons.tolist() == [s.horizon for s in specs]
+    assert other.arrays.horizons.tolist() != own.arrays.horizons.tolist()  # seed 2's 32-step task aside, longer
+    proc = cli_in_process("eval.py", str(short_run[0]), "--test-protocol", "jaxbridge")
+    assert proc.returncode == 0, proc.stderr
+    assert "test tasks (jaxbridge protocol)" in proc.stdout
+    with pytest.raises(jaxbridge.InputError, match="test_protocol 'held_out': light_switch_door has jaxbridge"):
+        policy.evaluate(test_protocol="held_out")
+    refused = cli_in_process("eval.py", str(short_run[0]), "--test-protocol", "jaxbridge", "--task-size", "cells=25")
+    assert refused.returncode == 2 and "does not combine with --sweep or --task-size" in refused.stderr
+
+
 def all_row(text: str) -> list[str]:
     return next(line.split() for line in text.splitlines() if line.strip().startswith("all "))
 
@@ -198,7 +219,7 @@ def test_an_existing_run_is_not_overwritten(short_run):
     (["train.py", "--preset", "theirs"], "invalid choice: 'theirs'"),
     (["train.py", "--env", "doorknobs", "--env-quirks", "raw_offsets,bogus"], "has no quirk 'bogus' (its quirks: raw_offsets"),
     (["train.py", "--env", "doorknobs", "--test-protocol", "authors"], "--test-protocol 'authors': doorknobs has jaxbridge"),
-    (["eval.py", "--env", "doorknobs", "--test-protocol", "authors"], "doorknobs has no test protocol 'authors'"),
+    (["eval.py", "--env", "doorknobs", "--test-protocol", "authors"], "--test-protocol 'authors': doorknobs has jaxbridge"),
     (["eval.py", "--bridge", "clever"], "invalid choice"),
     (["eval.py", "/nonexistent/run"], "not a run directory"),
     (["eval.py", "--num-seeds", "x"], "positive integer"),

@@ -5,7 +5,7 @@ import dataclasses
 import textwrap
 from typing import Sequence
 
-from jaxbridge.api.envs import EnvLike, env_name, load_env, seed_list
+from jaxbridge.api.envs import EnvLike, check_test_protocol, env_name, load_env, seed_list
 from jaxbridge.core import grid, presets
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.utils.errors import InputError, refusing
@@ -73,9 +73,7 @@ def _check_fits_env(config: TrainConfig, env_cls) -> None:
     """Refuse a config the env cannot train with (see make_config)."""
     with refusing("env_quirks"):
         env_cls.check_quirks(config.env_quirks)
-    if config.test_protocol not in env_cls.test_protocols:
-        raise InputError(f"{{setting}} {config.test_protocol!r}: {env_cls.name} has "
-                         f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}", "test_protocol")
+    check_test_protocol(env_cls, config.test_protocol)
     with refusing("episodes_per_cycle"):
         config.check_buffer_fits()
     _check_learner(config, env_cls)

@@ -88,3 +88,10 @@ def seed_list(seeds: int | Iterable[int]) -> list[int]:
     if not listed or min(listed) < 0:
         raise InputError(f"seeds: a positive count or non-negative seeds, got {seeds!r}")
     return listed
+
+
+def check_test_protocol(env_cls: type[NoveltyEnv], protocol: str) -> None:
+    """InputError (about the setting test_protocol) unless `protocol` is one of the env's test protocols."""
+    if protocol not in env_cls.test_protocols:
+        raise InputError(f"{{setting}} {protocol!r}: {env_cls.name} has "
+                         f"{', '.join(f'{k} ({v})' for k, v in env_cls.test_protocols.items())}", "test_protocol")

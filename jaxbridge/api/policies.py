@@ -7,7 +7,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from jaxbridge.api.envs import EnvLike, load_env, seed_list, sized_tasks
+from jaxbridge.api.envs import EnvLike, check_test_protocol, load_env, seed_list, sized_tasks
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.episode import Controls
 from jaxbridge.core.presets import default_test_protocol
@@ -136,12 +136,13 @@ class Policy(Bridges):
 
     def evaluate(self, tasks: Sequence | None = None, task_size: dict[str, int] | None = None,
                  seeds: Sequence[int] | None = None, num_tasks: int = 10, rollout_seed: int = 0,
-                 max_memory: float | None = None) -> Episodes:
-        """Greedy episodes: each seed's test tasks (default), `num_tasks` tasks per seed of `task_size`
-        (as eval.py --task-size), or every spec of `tasks` with each seed's network. `seeds`: a subset
-        of the run's (default: all). Rollouts draw from `rollout_seed`. Drawn or given tasks whose plan
-        tables would exceed `max_memory` GiB (default: what is available) are refused (InputError)."""
-        return self.episodes(self.tasks(tasks, task_size, seeds, num_tasks, max_memory), rollout_seed)
+                 max_memory: float | None = None, test_protocol: str | None = None) -> Episodes:
+        """Greedy episodes: each seed's test tasks (default; under another of the env's `test_protocols`
+        with `test_protocol`, e.g. held-out combinations), `num_tasks` tasks per seed of `task_size` (as eval.py
+        --task-size), or every spec of `tasks` with each seed's network. `seeds`: a subset of the run's
+        (default: all). Rollouts draw from `rollout_seed`. Drawn or given tasks whose plan tables would
+        exceed `max_memory` GiB (default: what is available) are refused (InputError)."""
+        return self.episodes(self.tasks(tasks, task_size, seeds, num_tasks, max_memory, test_protocol), rollout_seed)
 
     def attention(self, episodes: Episodes, rollout_seed: int = 0):
         """What a learned object selector (ours_learned_selection) looks at on `episodes`' tasks: per seed,
@@ -158,17 +159,23 @@ class Policy(Bridges):
                   rollout_seed=rollout_seed)
         return Path(path)
 
-    def tasks(self, tasks=None, task_size=None, seeds=None, num_tasks: int = 10, max_memory=None) -> TaskBatch:
+    def tasks(self, tasks=None, task_size=None, seeds=None, num_tasks: int = 10, max_memory=None,
+              test_protocol=None) -> TaskBatch:
         """The batch `evaluate` runs (see there)."""
         from jaxbridge.run.evaluate import policy_tasks
 
         if tasks is not None and task_size is not None:
             raise InputError("give tasks or task_size, not both")
+        if test_protocol is not None and (tasks is not None or task_size is not None):
+            raise InputError("{setting} picks the seeds' test tasks; it does not go with given or sized tasks",
+                             "test_protocol")
+        if test_protocol is not None:
+            check_test_protocol(self.trained.env_cls, test_protocol)
         sized = None if task_size is None else sized_tasks(self.trained.env_cls, task_size)
         seeds = None if seeds is None else [int(s) for s in seeds]
         limit = None if max_memory is None else int(max_memory * 2**30)
         with refusing():
-            return policy_tasks(self.trained, sized, num_tasks, limit, seeds=seeds, specs=tasks)
+            return policy_tasks(self.trained, sized, num_tasks, limit, seeds=seeds, specs=tasks, protocol=test_protocol)
 
 
 def load(run_dir: str | Path, approach: str | None = None, cycle: int | None = None) -> Policy:
@@ -209,6 +216,7 @@ class HandMade(Bridges):
     def __init__(self, env: EnvLike, bridge: str = "oracle", protocol: str | None = None):
         self.env_cls, self.bridge = load_env(env), bridge
         self.protocol = protocol or default_test_protocol(self.env_cls)
+        check_test_protocol(self.env_cls, self.protocol)
         if bridge not in self.LABELS:
             raise InputError(f"unknown bridge {bridge!r}; choose from {', '.join(self.LABELS)}")
         self.label = self.LABELS[bridge]

@@ -150,15 +150,16 @@ def sized_specs_per_seed(seeds: list[int], num_tasks: int, draw) -> dict[int, li
 
 
 def policy_tasks(policy: TrainedPolicy, sized_specs=None, num_tasks: int = 10, max_memory: int | None = None,
-                 seeds: list[int] | None = None, specs: list | None = None) -> TaskBatch:
-    """The batch a policy is evaluated on: each of `seeds`' (default: the run's) test tasks; or
+                 seeds: list[int] | None = None, specs: list | None = None, protocol: str | None = None) -> TaskBatch:
+    """The batch a policy is evaluated on: each of `seeds`' (default: the run's) test tasks under `protocol`
+    (default: the run's); or
     `num_tasks` per seed drawn by `sized_specs(rng) -> spec` (`sized_specs_per_seed`); or every spec
     of `specs` for each seed. Drawn or given tasks are refused with TooBig if their plan tables would
     exceed `max_memory` bytes or the memory available; the env has its quirks as the run trained."""
     config, env_cls = policy.config, policy.env_cls
     seeds = config.seeds if seeds is None else seeds
     if sized_specs is None and specs is None:
-        batch = evaluation_batch(env_cls, seeds, config.num_test_tasks, protocol=config.test_protocol)
+        batch = evaluation_batch(env_cls, seeds, config.num_test_tasks, protocol=protocol or config.test_protocol)
     else:
         sized = specs is None
         by_seed = sized_specs_per_seed(seeds, num_tasks, sized_specs) if sized else {s: list(specs) for s in seeds}
