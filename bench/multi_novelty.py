@@ -6,12 +6,13 @@
 
 Steps, each as a user runs it (child processes; wall time and peak memory recorded; a finished step is
 not run again, and training resumes from its checkpoints):
-  1. train.py --env multi_novelty (its default approaches, or --approaches) on the seeds: the test tasks;
+  1. train.py --env multi_novelty (its default approaches, or --approaches) on the seeds: the test tasks
+     (--keep-cycles: the checkpoints of the table's earlier cycles, for the held-out combinations);
   2. eval.py RUN --sweep novelties: the final bridges on more and more novelties;
-  3. each approach's final bridges on each seed's held-out combinations (eval.py RUN --test-protocol
-     held_out: doors with both locks; the training does not depend on the test tasks, so the bridges are
-     those a run testing on them would train) and on tasks holding one kind alone (KIND_TASKS per kind,
-     the same for every seed): which kinds it solves;
+  3. each approach's bridges at the table's cycles on each seed's held-out combinations (eval.py RUN
+     --test-protocol held_out [--cycle N]: doors with both locks; the training does not depend on the
+     test tasks, so the bridges are those a run testing on them would train), and its final bridges on
+     tasks holding one kind alone (KIND_TASKS per kind, the same for every seed): which kinds it solves;
   4. python -m bench.training: seconds per cycle of each learned approach, one after another in one
      process, as a ratio to ours'.
 Writes into docs/results/multi_novelty/ (on a test-seed set its ledger row first; code with uncommitted
@@ -35,6 +36,7 @@ import jaxbridge
 from bench.ledger import add_seed_run_flags, begin_on_seeds, on_test_seeds, seed_list
 from bench.paper import Steps, csv_text, train_step, write_record, write_run_records
 from bench.records import ROOT, check_clean, git_commit, machine, run_child, shown
+from bench.results_blocks import CYCLES
 from jaxbridge.utils.files import write_atomic
 from jaxbridge.utils.stats import bootstrap_ci
 
@@ -62,12 +64,14 @@ def summary_row(episodes: jaxbridge.Episodes, **what) -> dict:
             "high": f"{float(high):.3f}"}
 
 
-def final_rows(run: Path, approaches: list[str]) -> tuple[list[dict], list[dict]]:
-    """Each approach's final greedy bridges on its seeds' held-out combinations, and on each kind alone."""
+def greedy_rows(run: Path, approaches: list[str], kept: list[int]) -> tuple[list[dict], list[dict]]:
+    """Each approach's greedy bridges on its seeds' held-out combinations (at the `kept` cycles and the
+    last), and its final bridges on each kind alone."""
     held_out, kinds = [], []
     for name in approaches:
-        policy = jaxbridge.load(run, name)
-        held_out.append(summary_row(policy.evaluate(test_protocol="held_out"), approach=name, cycle=policy.cycle))
+        for cycle in [*kept, None]:
+            policy = jaxbridge.load(run, name, cycle)
+            held_out.append(summary_row(policy.evaluate(test_protocol="held_out"), approach=name, cycle=policy.cycle))
         kinds += [summary_row(policy.evaluate(tasks=specs), approach=name, kind=kind) for kind, specs in kind_tasks().items()]
     return held_out, kinds
 
@@ -105,10 +109,10 @@ def main(argv=None) -> int:
     steps = Steps(runs / f"{args.stem}-steps.json")
     flags = ["--env", ENV, "--approaches", ",".join(names), "--first-seed", str(args.seed_list[0]), "--num-seeds",
              str(len(args.seed_list)), "--cycles", str(args.cycles), "--no-progress"]
-    run = runs / f"{args.stem}-test"
-    trained = steps.run("train", lambda: train_step(run, flags))
+    run, kept = runs / f"{args.stem}-test", [c for c in CYCLES if c < args.cycles]
+    trained = steps.run("train", lambda: train_step(run, flags + (["--keep-cycles", ",".join(map(str, kept))] if kept else [])))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
-    held_out, kinds = final_rows(run, names)
+    held_out, kinds = greedy_rows(run, names, kept)
     learned = ["ours"] + [n for n in names if n not in NOT_LEARNED and n != "ours"]
     cost = steps.run("cost", lambda: run_child(["python", "-m", "bench.training", "--env", ENV, "--num-seeds",
                                                 str(min(len(args.seed_list), 8)), "--cycles", str(args.cost_cycles),

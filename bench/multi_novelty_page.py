@@ -27,7 +27,7 @@ def cell(row: dict) -> tuple[float, tuple[float, float]]:
 def bars_lines(test: dict, held_out: list[dict], last: int) -> list[str]:
     """Each learned approach's last-cycle solve rate on the test tasks and the held-out combinations against
     their bars, and which meet both."""
-    held = {row["approach"]: row for row in held_out}
+    held = {row["approach"]: row for row in held_out if int(row["cycle"]) == last}
     learned = [n for n in test if n not in ("random", "pure_planning")]
     lines = [f"| approach | test tasks, cycle {last} | held-out combinations, cycle {last} |", "|---|---|---|"]
     meets = []
@@ -48,14 +48,15 @@ def bars_lines(test: dict, held_out: list[dict], last: int) -> list[str]:
     return lines + ["", answer]
 
 
-def final_table(rows: list[dict], column: str) -> list[str]:
-    """Each approach's final bridges on each `column` value's tasks: mean [95% CI] over seeds."""
+def summary_table(rows: list[dict], column: str, heading: str = "{}") -> list[str]:
+    """Summary rows (bench.multi_novelty.summary_row) as a table: an approach per row, a value of `column`
+    per column (headed by `heading` formatted with it), mean [95% CI] over seeds in each cell."""
     values = list(dict.fromkeys(r[column] for r in rows))
     cells: dict[str, dict[str, str]] = {}
     for r in rows:
         mean, (low, high) = cell(r)
         cells.setdefault(r["approach"], {})[r[column]] = f"{mean:.2f} [{low:.2f}, {high:.2f}]"
-    return (["| approach | " + " | ".join(values) + " |", "|---|" + "---|" * len(values)]
+    return (["| approach | " + " | ".join(heading.format(v) for v in values) + " |", "|---|" + "---|" * len(values)]
             + [f"| {label(name)} | " + " | ".join(by[v] for v in values) + " |" for name, by in cells.items()])
 
 
@@ -75,11 +76,12 @@ def record_lines(run: dict, folder: Path, stem: str) -> list[str]:
     lines = [f"{seeds_label(run['seeds']).capitalize()}, {last} cycles; each cell: mean [95% CI] over seeds, IQM "
              "[95% CI] beside it.", "", "Test tasks:", "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in test.items()]
-    lines += ["", f"The bars, at cycle {last} (the held-out combinations: each seed's `--test-protocol held_out` tasks, "
-              "kinds mixed as no training task mixes them, met by the final bridges; `eval.py RUN --test-protocol "
-              "held_out`):", "", *bars_lines(test, held_out, last)]
+    lines += ["", "Held-out combinations (each seed's `--test-protocol held_out` tasks: kinds mixed as no training task "
+              "mixes them), met by the run's bridges at each cycle (`eval.py RUN --test-protocol held_out --cycle N`):",
+              "", *summary_table(held_out, "cycle", "cycle {}")]
+    lines += ["", f"The bars, at cycle {last}:", "", *bars_lines(test, held_out, last)]
     lines += ["", "Each kind alone (tasks holding one kind, the same for every seed; the final bridges):", "",
-              *final_table(read_csv(folder / f"{stem}_kinds.csv"), "kind")]
+              *summary_table(read_csv(folder / f"{stem}_kinds.csv"), "kind")]
     lines += ["", f"Cost per cycle against ours', one timing run in one process (`{run['steps']['cost']['command']}`):",
               *cost_lines(run)]
     lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",
