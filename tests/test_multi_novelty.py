@@ -2,7 +2,7 @@
 applicability, the env contract, tasks whose held-out combinations no training task holds, and, through
 the meta-policy, that every kind blocks the planner, the oracle fixes each kind alone, the test tasks and
 the held-out combinations, a random bridge few, and the closest-object rule picks the wrong object at
-the keycard doors."""
+the keycard doors; and the study page's answer to the paper's question."""
 from dataclasses import replace
 
 import jax
@@ -285,3 +285,24 @@ def test_an_oracle_episode_draws_with_its_doors_opened_by_the_bridge_and_the_ski
     assert drawer.object_xy(batch.env, trace, "door", keycard, 5)[0] == spec.door_cells[keycard] + 0.5
     assert drawer.object_xy(batch.env, trace, "key", keycard, 5)[0] == spec.key_cells[keycard] + 0.5
     assert drawer.object_xy(batch.env, trace, "light", 0, 5)[0] == spec.num_cells - 0.5
+
+
+# ---- the study's page --------------------------------------------------------------------------------------
+def test_the_page_answers_whether_one_bridge_suffices_on_each_set():
+    """bench.multi_novelty_page: one bridge meets a bar, only a per-signature bridge does, or none does;
+    and the kind alone each approach named solves least."""
+    from bench.multi_novelty_page import answer
+
+    def cells(**by_name):
+        return {name: {"test": (t, (t - 0.1, t + 0.05)), "held_out": (h, (h - 0.1, h + 0.05))}
+                for name, (t, h) in by_name.items()}
+    kinds = [{"approach": name, "kind": kind, "mean": str(mean), "low": "0", "high": "1"}
+             for name, means in (("ours", (1.0, 0.7)), ("ours_learned_selection", (0.9, 0.4)), ("ours_per_signature", (0.6, 0.8)))
+             for kind, mean in zip(("keycard", "both"), means)]
+    text = answer(cells(ours=(0.6, 0.3), ours_learned_selection=(0.94, 0.2), ours_per_signature=(0.5, 0.85)), kinds)
+    assert text.startswith("On the test tasks, one bridge for every kind suffices: ours, learned selection 0.94")
+    assert ("On the held-out combinations, one bridge does not suffice (ours 0.30 [0.20, 0.35]); ours, a bridge per "
+            "signature 0.85 [0.75, 0.90] meets the bar of 0.8.") in text
+    assert text.endswith("ours, both (0.70); ours, learned selection, both (0.40); ours, a bridge per signature, keycard (0.60).")
+    none = answer(cells(ours=(0.6, 0.3), ours_learned_selection=(0.7, 0.2), ours_per_signature=(0.5, 0.1)), kinds)
+    assert "On the test tasks, no approach reaches the bar of 0.9: the best is ours, learned selection 0.70" in none
