@@ -18,7 +18,20 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxbridge.core.observations import token_slots
-from jaxbridge.learn.q_bridge import SplitInput, UniformDense, mlp
+from jaxbridge.learn.q_bridge import SplitInput, UniformDense, mlp, uniform_params
+
+
+class KeyScores(nn.Module):
+    """Each token's key (a dense layer of the token) dotted with the query, computed as the token dotted with
+    the query taken back through the key's weights: (t W + b).q = t.(W q) + b.q, one vector per observation
+    instead of a key per token, the same value up to float rounding (and the same parameters)."""
+
+    features: int
+
+    @nn.compact
+    def __call__(self, tokens: jax.Array, query: jax.Array) -> jax.Array:
+        kernel, bias = uniform_params(self, tokens.shape[-1], self.features)
+        return jnp.einsum("...nd,...d->...n", tokens, query @ kernel.T) + (query @ bias)[..., None]
 
 
 class ObjectAttention(nn.Module):
@@ -36,16 +49,17 @@ class ObjectAttention(nn.Module):
 
     @nn.compact
     def __call__(self, tokens: jax.Array) -> tuple[jax.Array, jax.Array]:
-        # The only per-object layer is the key: every stored transition's every object passes it at each
-        # update, so it is what attention costs. The values are the tokens themselves; what the Q-network
-        # makes of the attended one is its first layer's work, as for ours' selected features.
+        # The only per-object layer is the key, and it is folded into the query (KeyScores): every stored
+        # transition's every object passes it at each update, so it is what attention costs. The values are
+        # the tokens themselves; what the Q-network makes of the attended one is its first layer's work, as
+        # for ours' selected features.
         query = UniformDense(self.keys, name="query")(tokens[..., 0, :])
-        keys = UniformDense(self.keys, name="key")(tokens)
+        scores = KeyScores(self.keys, name="key")(tokens, query)
         distance = jnp.linalg.norm(tokens[..., self.position], axis=-1)
         penalty = jax.nn.softplus(self.param("near", lambda _: jnp.log(jnp.expm1(jnp.float32(self.near)))))
         # What an object is may move the attention by at most `preference` against its distance: learned on
         # the few objects of a training task, a wide preference overrides distance on the many of a test task.
-        content = jnp.einsum("...nk,...k->...n", keys, query) / jnp.sqrt(self.keys)
+        content = scores / jnp.sqrt(self.keys)
         logits = self.preference * jnp.tanh(content / self.preference) - penalty * distance
         candidate = tokens[..., -1] > 0.5
         # A large finite floor, not -inf: with nothing to look at, the softmax and its gradient stay finite.

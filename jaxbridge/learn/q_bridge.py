@@ -103,10 +103,7 @@ class UniformDense(nn.Module):
     def __call__(self, x: jax.Array | SplitInput) -> jax.Array:
         split = isinstance(x, SplitInput)
         fan_in = x.width if split else x.shape[-1]
-        bound = self.scale / np.sqrt(fan_in)
-        init = lambda key, shape: jax.random.uniform(key, shape, jnp.float32, -bound, bound)
-        kernel = self.param("kernel", init, (fan_in, self.features))
-        bias = self.param("bias", init, (self.features,))
+        kernel, bias = uniform_params(self, fan_in, self.features, self.scale)
         if not split:
             return x @ kernel + bias
         action_share = x.action @ kernel[fan_in - x.action.shape[-1]:] + bias
@@ -115,6 +112,14 @@ class UniformDense(nn.Module):
         rows = x.task.split
         task_share = (x.task.values @ take_rows(kernel, rows.constant))[x.task.index]  # once per task, then gathered
         return task_share + x.observation @ take_rows(kernel, rows.varying) + action_share
+
+
+def uniform_params(module: nn.Module, fan_in: int, features: int, scale: float = 1.0) -> tuple[jax.Array, jax.Array]:
+    """A dense layer's kernel [fan_in, features] and bias, declared in `module` (inside its compact call) and
+    initialised as PyTorch's nn.Linear: uniform in +-scale/sqrt(fan_in)."""
+    bound = scale / np.sqrt(fan_in)
+    init = lambda key, shape: jax.random.uniform(key, shape, jnp.float32, -bound, bound)
+    return module.param("kernel", init, (fan_in, features)), module.param("bias", init, (features,))
 
 
 def take_rows(x: jax.Array, positions: tuple[int, ...]) -> jax.Array:
