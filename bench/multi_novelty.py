@@ -64,16 +64,16 @@ def summary_row(episodes: jaxbridge.Episodes, **what) -> dict:
             "high": f"{float(high):.3f}"}
 
 
-def greedy_rows(run: Path, approaches: list[str], kept: list[int]) -> tuple[list[dict], list[dict]]:
+def greedy_rows(run: Path, approaches: list[str], kept: list[int]) -> dict:
     """Each approach's greedy bridges on its seeds' held-out combinations (at the `kept` cycles and the
-    last), and its final bridges on each kind alone."""
-    held_out, kinds = [], []
+    last), and its final bridges on each kind alone; with the seconds it took."""
+    start, held_out, kinds = time.perf_counter(), [], []
     for name in approaches:
         for cycle in [*kept, None]:
             policy = jaxbridge.load(run, name, cycle)
             held_out.append(summary_row(policy.evaluate(test_protocol="held_out"), approach=name, cycle=policy.cycle))
         kinds += [summary_row(policy.evaluate(tasks=specs), approach=name, kind=kind) for kind, specs in kind_tasks().items()]
-    return held_out, kinds
+    return {"held_out": held_out, "kinds": kinds, "wall_s": round(time.perf_counter() - start, 1)}
 
 
 def parse(argv) -> argparse.Namespace:
@@ -112,7 +112,7 @@ def main(argv=None) -> int:
     run, kept = runs / f"{args.stem}-test", [c for c in CYCLES if c < args.cycles]
     trained = steps.run("train", lambda: train_step(run, flags + (["--keep-cycles", ",".join(map(str, kept))] if kept else [])))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
-    held_out, kinds = greedy_rows(run, names, kept)
+    greedy = steps.run("greedy", lambda: greedy_rows(run, names, kept))
     learned = ["ours"] + [n for n in names if n not in NOT_LEARNED and n != "ours"]
     cost = steps.run("cost", lambda: run_child(["python", "-m", "bench.training", "--env", ENV, "--num-seeds",
                                                 str(min(len(args.seed_list), 8)), "--cycles", str(args.cost_cycles),
@@ -120,15 +120,15 @@ def main(argv=None) -> int:
     check_clean("bench.multi_novelty", args.allow_dirty, during=True)
     out = args.records / ENV
     write_run_records(run, out, args.stem)
-    write_atomic(out / f"{args.stem}_held_out.csv", csv_text(held_out))
-    write_atomic(out / f"{args.stem}_kinds.csv", csv_text(kinds))
+    write_atomic(out / f"{args.stem}_held_out.csv", csv_text(greedy["held_out"]))
+    write_atomic(out / f"{args.stem}_kinds.csv", csv_text(greedy["kinds"]))
     record = {"env": ENV, "commit": git_commit(), "command": command_line(args), "seeds": args.seeds,
               "cycles": args.cycles, "approaches": names,
               "cost": [line for line in cost["stdout"].splitlines() if "x ours'" in line],
               "schedule": json.loads((run / "schedule.json").read_text()),  # each core's busy seconds
-              "steps": {"train": trained, "sweep": sweep,
+              "steps": {"train": trained, "sweep": sweep, "greedy": {"wall_s": greedy["wall_s"], "commit": greedy["commit"]},
                         "cost": {k: v for k, v in cost.items() if k != "stdout"}},
-              "wall_s": round(time.perf_counter() - start, 1), "machine": machine()}
+              "wall_s": round(sum(step["wall_s"] for step in (trained, sweep, greedy, cost)), 1), "machine": machine()}
     return write_record(out / f"{args.stem}.json", record, start)
 
 
