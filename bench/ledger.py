@@ -70,8 +70,7 @@ def add_seed_run_flags(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--records", type=Path, default=RECORDS, help="where the records go (default: docs/results)")
     parser.add_argument("--allow-dirty", action="store_true",
                         help="run on code with uncommitted changes (a local try): the records go to RUNS/records")
-    parser.add_argument("--change", help="a test-seed run's ledger row: what changed since the set's previous run")
-    parser.add_argument("--chosen-on", help="a test-seed run's ledger row: the seeds the change was chosen on")
+    add_reason_flags(parser, required=False)
 
 
 def begin_on_seeds(module: str, env: str, seeds: list[int], command: str, args: argparse.Namespace) -> bool:
@@ -94,14 +93,16 @@ def begin_on_seeds(module: str, env: str, seeds: list[int], command: str, args: 
     return bool(changed)
 
 
-def add_reason_flags(parser: argparse.ArgumentParser) -> None:
-    """The two flags a test-seed run states its reason with (the ledger's `change` and `chosen_on`)."""
-    parser.add_argument("--change", required=True,
-                        help="what changed since this seed set's previous run of the same study and why, in a line "
-                             "(\"first run\" for the first); goes into docs/results/ledger.csv")
-    parser.add_argument("--chosen-on", required=True,
-                        help="the seeds the change was chosen on, e.g. \"development seeds 0-31\" (\"-\" for a first "
-                             "run); goes into docs/results/ledger.csv")
+def add_reason_flags(parser: argparse.ArgumentParser, required: bool = True) -> None:
+    """The two flags a test-seed run states its reason with (the ledger's `change` and `chosen_on`); not
+    `required` where the command also runs on development seeds, which need no ledger row."""
+    where = "" if required else "on test seeds: "
+    parser.add_argument("--change", required=required,
+                        help=f"{where}what changed since this seed set's previous run of the same study and why, in a "
+                             "line (\"first run\" for the first); goes into docs/results/ledger.csv")
+    parser.add_argument("--chosen-on", required=required,
+                        help=f"{where}the seeds the change was chosen on, e.g. \"development seeds 0-31\" (\"-\" for "
+                             "a first run); goes into docs/results/ledger.csv")
 
 
 def main(argv=None) -> int:

@@ -6,18 +6,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from bench.multi_novelty import ENV, NOT_LEARNED
 from bench.performance_blocks import busy_text
 from bench.records import RECORDS
 from bench.results_blocks import (approach_row, bar_text, by_approach, commit_text, cost_ratio, label, machine_text,
                                   novelty_table, read_csv, read_json, seeds_label, step_command, table_header)
 
-ENV = "multi_novelty"
 FOLDER = RECORDS / ENV
 BARS = {"test": 0.9, "held_out": 0.8}  # issue 54: the mean test solve rate at the last cycle, per protocol
 COST_BAR = 3.0  # issue 54: no approach of the default over 3x ours per cycle
 IDLE_BAR = 1.1  # issue 54: the training's wall over the approaches' summed seconds per core
 ONE_BRIDGE = ("ours", "ours_learned_selection")  # one bridge for every kind
-NOT_LEARNED = ("random", "pure_planning")
 
 
 def cell(row: dict) -> tuple[float, tuple[float, float]]:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 import jaxbridge
+from bench.ledger import on_test_seeds
 from bench.records import DISTRACTOR_ENVS, ENVS, RECORDS
 from envs_jax import VARIANTS
 from jaxbridge.utils import stats
@@ -221,7 +222,6 @@ def sweep_table(env: str) -> str:
 
 def seeds_label(seeds: str) -> str:
     """"test seeds 300-331" or "development seeds 0-7": a record's seeds (FIRST-LAST) with what they are."""
-    from bench.ledger import on_test_seeds
     return f"{'test' if on_test_seeds([int(seeds.partition('-')[0])]) else 'development'} seeds {seeds}"
 
 

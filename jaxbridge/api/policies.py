@@ -166,10 +166,10 @@ class Policy(Bridges):
 
         if tasks is not None and task_size is not None:
             raise InputError("give tasks or task_size, not both")
-        if test_protocol is not None and (tasks is not None or task_size is not None):
-            raise InputError("{setting} picks the seeds' test tasks; it does not go with given or sized tasks",
-                             "test_protocol")
         if test_protocol is not None:
+            if tasks is not None or task_size is not None:
+                raise InputError("{setting} picks the seeds' test tasks; it does not go with given or sized tasks",
+                                 "test_protocol")
             check_test_protocol(self.trained.env_cls, test_protocol)
         sized = None if task_size is None else sized_tasks(self.trained.env_cls, task_size)
         seeds = None if seeds is None else [int(s) for s in seeds]
