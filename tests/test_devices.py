@@ -16,7 +16,7 @@ from jaxbridge.run import checkpoint
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import SeedMesh, device_count_arg
 from jaxbridge.learn.setup import make_setup
-from run_helpers import with_fusion_emitters
+from run_helpers import cli_in_process, with_fusion_emitters
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ["--num-seeds", "3", "--cycles", "3", "--updates-per-cycle", "20", "--checkpoint-every", "1",
@@ -83,7 +83,7 @@ def test_a_run_widened_onto_a_second_device_mid_run_gives_the_numbers_of_one(run
 def test_bad_device_counts_are_one_line_errors():
     for value, message in (("0", "expected auto or a positive integer, got 0"),
                            ("foo", "expected auto or a positive integer, got 'foo'")):
-        proc = train("--devices", value, "--cycles", "1")
+        proc = cli_in_process("train.py", "--devices", value, "--cycles", "1")
         assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
     # More devices than the machine has (here: a CPU fixed at one device by XLA_FLAGS, as a GPU box is
     # fixed at its GPUs).
