@@ -7,7 +7,7 @@ import pytest
 
 from envs_jax import env_class
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.observations import object_tokens, token_slots, token_width
+from jaxbridge.core.observations import object_tokens, robot_features, token_slots, token_width
 from jaxbridge.learn.dqn import q_network
 from jaxbridge.learn.object_q import attention
 from jaxbridge.learn.q_bridge import encode
@@ -74,6 +74,27 @@ def test_attention_reads_the_distance_it_is_set_to(distance, nearest):
     net, params = network(env, attention_distance=distance)
     weights = np.asarray(attention(net, params, tokens))
     assert weights.argmax() == nearest and weights[nearest] > 0.9
+
+
+@pytest.mark.parametrize("read", [False, True])
+def test_the_q_network_reads_the_robots_own_features_only_when_asked(read):
+    """Coffee's robot has features (z, tilt, wrist, fingers): with only the jug to look at, so that attention
+    cannot move, Q changes with them only under attention_robot_features; it reads the jug either way."""
+    coffee = env_class("coffee")
+    spec = coffee.train_task(0)
+    env = coffee.for_tasks([spec])
+    state = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec)))
+    rows = np.asarray(object_tokens(env, state, state)).reshape(-1, token_width(env)).copy()
+    rows[2:, -1] = 0.0  # the jug (token 1) the one object a skill can act on
+    net, params = network(env, attention_robot_features=read)
+    q = q_values(env, net, params, jnp.asarray(rows.reshape(-1)))
+    features = slice(*robot_features(env))
+    assert (features.start, features.stop) == (4, 8) and robot_features(ENV) is None  # LSD's robot has none
+    moved, turned = rows.copy(), rows.copy()
+    moved[0, features] += 0.5  # the robot's own features
+    turned[1, features.start] += 0.5  # the jug's rotation
+    assert not np.allclose(q_values(env, net, params, jnp.asarray(turned.reshape(-1))), q)
+    assert np.allclose(q_values(env, net, params, jnp.asarray(moved.reshape(-1))), q) != read
 
 
 def test_the_network_reads_any_number_of_objects_in_any_order():

@@ -22,8 +22,9 @@ from jaxbridge.core.settings import Settings, described, setting
 # `learner` with its `name` (older configs were flat: a learner reads its fields from the top level, and
 # the other learner's fields, which it never read, are dropped); 13: `attention_distance`,
 # `attention_preference` (older learned selectors read the distance now, with a preference bound of 4),
-# `keep_cycles` (older runs kept the latest two checkpoints alone)
-CONFIG_VERSION = 13
+# `keep_cycles` (older runs kept the latest two checkpoints alone); 14: `attention_robot_features` (older
+# learned selectors' Q-networks read the robot's own features)
+CONFIG_VERSION = 14
 NESTED_SINCE = 12
 
 
@@ -155,6 +156,8 @@ class TrainConfig(Settings):
         settings = settings_class(learner["name"])
         if version < 13 and "attention_distance" in _names(settings):
             learner = {"attention_distance": "now", "attention_preference": 4.0, **learner}
+        if version < 14 and "attention_robot_features" in _names(settings):
+            learner = {"attention_robot_features": True, **learner}
         unknown = (set(data) - set(_OWN)) | {f"learner.{k}" for k in set(learner) - set(_names(settings))}
         if unknown:
             raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")

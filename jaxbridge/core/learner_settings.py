@@ -86,6 +86,11 @@ class QSettings(LearnerSettings):
     distance (a tanh bound). Learned on a training task's few objects, a wider bound lets a preference
     override nearness among a test task's many; a narrower one cannot pass over a nearer decoy
     (docs/design/approaches.md)."""
+    attention_robot_features: bool = False
+    """Learned selection only: the Q-network reads the robot's own features (Coffee's z, tilt, wrist and
+    fingers) beside its token's type and displacement since the stall. Off (ours): it reads what the paper's
+    rule gives, the chosen object and how far the robot has moved; attention's query reads the robot's
+    whole token either way. Chosen on development seeds (docs/design/approaches.md)."""
     q_ensemble: int = setting(1, low=1)
     """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     reset_optimizer: bool = False

@@ -42,6 +42,13 @@ def token_position(env: NoveltyEnv, at_stall: bool) -> tuple[int, int]:
     return start, start + POSITION_DIM
 
 
+def robot_features(env: NoveltyEnv) -> tuple[int, int] | None:
+    """(start, end): where the robot's token holds the robot's own features (after its type's one-hot); None
+    where the robot's type has none (every env but Coffee's)."""
+    start, count = len(env.object_types), len(env.object_types["robot"])
+    return (start, start + count) if count else None
+
+
 def relative_to_robot(position: jax.Array, robot: jax.Array) -> jax.Array:
     """Offsets from the robot squashed to (-1, 1) per axis, d / (1 + |d|): exact near the robot, bounded
     far away, so a larger test task's distances are not beyond the training task's."""

@@ -14,7 +14,7 @@ from flax import struct
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import AttentionDistance, Normalise, PolyakPer, TargetInit
-from jaxbridge.core.observations import token_position, token_width
+from jaxbridge.core.observations import robot_features, token_position, token_width
 from jaxbridge.core.signatures import signature_members, signature_shape
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
@@ -138,8 +138,9 @@ def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork
     if config.normalise is not Normalise.NONE:
         raise ValueError(f"approach {config.approach} does not scale its object tokens: no normalise")
     at_stall = config.attention_distance is AttentionDistance.STALL
+    hidden = None if config.attention_robot_features else robot_features(env)
     return ObjectQNetwork(token_width(env), env.num_skills + 2, token_position(env, at_stall),
-                          config.attention_preference, config.hidden_sizes, config.activation, config.output_init,
+                          config.attention_preference, hidden, config.hidden_sizes, config.activation, config.output_init,
                           ensemble=config.q_ensemble)
 
 

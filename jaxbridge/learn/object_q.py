@@ -79,6 +79,7 @@ class ObjectQMember(nn.Module):
     output_init: str
     layer_norm: bool
     preference: float
+    robot_features: tuple[int, int] | None  # the robot token's feature entries the MLP leaves out (None: none)
 
     def encoder(self, **kwargs) -> ObjectAttention:
         return ObjectAttention(max(self.hidden_sizes[0] // 4, 1), slice(*self.position), self.preference, **kwargs)
@@ -92,9 +93,12 @@ class ObjectQMember(nn.Module):
             x[..., :-self.action_width], x[..., -self.action_width:])
         tokens = self.tokens(observation)
         attended, _ = self.encoder(name="attention")(tokens)
+        robot = tokens[..., 0, :]
+        if self.robot_features is not None:  # zeros in their place: the same layer shapes either way
+            robot = jnp.where(np.isin(np.arange(robot.shape[-1]), np.arange(*self.robot_features)), 0.0, robot)
         # The robot's token and the attended one: the first layer's share of them once per observation,
         # however many candidate actions.
-        seen = jnp.concatenate([tokens[..., 0, :], attended], -1)
+        seen = jnp.concatenate([robot, attended], -1)
         return carry, mlp(SplitInput(seen, action), self.hidden_sizes, self.activation, self.output_init, self.layer_norm)
 
 
@@ -107,6 +111,7 @@ class ObjectQNetwork(nn.Module):
     action_width: int
     position: tuple[int, int]
     preference: float
+    robot_features: tuple[int, int] | None = None  # the robot's own features, left out of the MLP's input
     hidden_sizes: Sequence[int] = (32, 32)
     activation: str = "leaky_relu"
     output_init: str = "zero"
@@ -115,7 +120,7 @@ class ObjectQNetwork(nn.Module):
 
     def fields(self) -> tuple:
         return (self.token_width, self.action_width, self.position, tuple(self.hidden_sizes), self.activation,
-                self.output_init, self.layer_norm, self.preference)
+                self.output_init, self.layer_norm, self.preference, self.robot_features)
 
     @nn.compact
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
