@@ -22,7 +22,7 @@ from bench.records import ROOT
 
 DOCS = ("README.md", "docs/RESULTS.md", "docs/PERFORMANCE.md", "docs/results/generalisation.md", "docs/results/plan_repair.md",
         "docs/results/learners.md", "docs/results/selection.md", "docs/results/fix_length.md",
-        "docs/results/multi_novelty.md")
+        "docs/results/multi_novelty.md", "docs/results/ledger.md")
 BLOCKS = {**results_blocks.BLOCKS, **performance_blocks.BLOCKS, "claims": claims.claims_table,
           "fix length": fix_length_page.block, "multi novelty": multi_novelty_page.block}
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[\w ]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
