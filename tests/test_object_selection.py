@@ -97,6 +97,34 @@ def test_the_q_network_reads_the_robots_own_features_only_when_asked(read):
     assert np.allclose(q_values(env, net, params, jnp.asarray(moved.reshape(-1))), q) != read
 
 
+def test_a_fixed_penalty_is_the_learned_ones_start_without_a_parameter():
+    from flax import traverse_util
+    env, tokens = lsd(8, (1, 3, 5), robot_cell=3)
+    net, params = network(env)
+    flat = traverse_util.flatten_dict(params)
+    at_start = {k: jnp.log(jnp.expm1(jnp.float32(16.0))) if k[-1] == "near" else v for k, v in flat.items()}
+    fixed, _ = network(env, attention_fixed_penalty=True)
+    without = traverse_util.unflatten_dict({k: v for k, v in flat.items() if k[-1] != "near"})
+    assert len(at_start) == len(flat) > len(traverse_util.flatten_dict(without))
+    expected = np.asarray(attention(net, traverse_util.unflatten_dict(at_start), tokens))
+    np.testing.assert_allclose(np.asarray(attention(fixed, without, tokens)), expected, rtol=1e-5, atol=1e-7)
+    assert not np.allclose(np.asarray(attention(net, params, tokens)), expected)  # a learned one moves
+
+
+def test_log_scaled_attention_sharpens_with_the_number_of_candidates():
+    """The logits times log n: the softmax of log n times the unscaled log-weights, on 2 and on 6 candidates."""
+    for doors in ((1,), (1, 3, 5, 7, 9)):
+        env, tokens = lsd(12, doors, robot_cell=3)
+        net, params = network(env)
+        scaled, _ = network(env, attention_log_scale=True)
+        plain, sharp = (np.asarray(attention(n, params, tokens)) for n in (net, scaled))
+        on = plain > 0
+        n = on.sum()
+        expected = np.exp(np.log(n) * np.log(plain[on]))
+        np.testing.assert_allclose(sharp[on], expected / expected.sum(), rtol=1e-4, atol=1e-6)
+        assert (sharp[on].max() > plain[on].max()) == (n > 2)  # log 2 < 1 softens; more candidates sharpen
+
+
 def test_the_network_reads_any_number_of_objects_in_any_order():
     env, tokens = lsd(6, (1, 3), robot_cell=3)
     net, params = network(env)

@@ -83,7 +83,8 @@ def test_every_older_config_version_loads_as_it_was_trained():
     loaded = TrainConfig.from_dict(v11)
     assert type(loaded.learner) is DQNSettings and loaded.updates_per_cycle == 10 and loaded.buffer_capacity == 256
     assert flat(loaded) == {**{k: v for k, v in v11.items() if k not in ("q_lambda", "pqn_epochs", "pqn_minibatches")},
-                            "count_bonus": 0.0, "keep_cycles": [],  # added later: their defaults, what the run had
+                            "count_bonus": 0.0, "keep_cycles": [], "attention_fixed_penalty": False,
+                            "attention_log_scale": False,  # added later: their defaults, what the run had
                             "attention_distance": "now", "attention_preference": 4.0,  # not the defaults: what it had
                             "attention_robot_features": True}
     pqn = TrainConfig(learner="pqn", q_lambda=0.3, pqn_epochs=8)

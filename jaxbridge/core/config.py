@@ -23,7 +23,8 @@ from jaxbridge.core.settings import Settings, described, setting
 # the other learner's fields, which it never read, are dropped); 13: `attention_distance`,
 # `attention_preference` (older learned selectors read the distance now, with a preference bound of 4),
 # `keep_cycles` (older runs kept the latest two checkpoints alone); 14: `attention_robot_features` (older
-# learned selectors' Q-networks read the robot's own features)
+# learned selectors' Q-networks read the robot's own features), `attention_fixed_penalty`,
+# `attention_log_scale` (older ones had neither: their defaults)
 CONFIG_VERSION = 14
 NESTED_SINCE = 12
 

@@ -91,6 +91,14 @@ class QSettings(LearnerSettings):
     fingers) beside its token's type and displacement since the stall. Off (ours): it reads what the paper's
     rule gives, the chosen object and how far the robot has moved; attention's query reads the robot's
     whole token either way. Chosen on development seeds (docs/design/approaches.md)."""
+    attention_fixed_penalty: bool = False
+    """Learned selection only: attention's penalty per unit of distance stays at its start (16) instead of
+    being learned, so that a preference passes over a nearer object only within its bound's reach
+    (attention_preference / 16 squashed units). Tried on development seeds (docs/design/approaches.md)."""
+    attention_log_scale: bool = False
+    """Learned selection only: attention's logits times the log of the number of candidates (a scalable
+    softmax), so that a test task's many objects do not spread what a training task's few sharpened. Tried
+    on development seeds (docs/design/approaches.md)."""
     q_ensemble: int = setting(1, low=1)
     """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     reset_optimizer: bool = False

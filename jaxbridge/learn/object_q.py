@@ -45,6 +45,8 @@ class ObjectAttention(nn.Module):
     keys: int  # the width of a token's key and the robot's query
     position: slice
     preference: float  # the learner's attention_preference
+    fixed_penalty: bool = False  # the learner's attention_fixed_penalty: the penalty stays at `near`
+    log_scale: bool = False  # the learner's attention_log_scale
     near: float = 16.0
 
     @nn.compact
@@ -56,12 +58,15 @@ class ObjectAttention(nn.Module):
         query = UniformDense(self.keys, name="query")(tokens[..., 0, :])
         scores = KeyScores(self.keys, name="key")(tokens, query)
         distance = jnp.linalg.norm(tokens[..., self.position], axis=-1)
-        penalty = jax.nn.softplus(self.param("near", lambda _: jnp.log(jnp.expm1(jnp.float32(self.near)))))
+        penalty = jnp.float32(self.near) if self.fixed_penalty else jax.nn.softplus(
+            self.param("near", lambda _: jnp.log(jnp.expm1(jnp.float32(self.near)))))
         # What an object is may move the attention by at most `preference` against its distance: learned on
         # the few objects of a training task, a wide preference overrides distance on the many of a test task.
         content = scores / jnp.sqrt(self.keys)
         logits = self.preference * jnp.tanh(content / self.preference) - penalty * distance
         candidate = tokens[..., -1] > 0.5
+        if self.log_scale:  # a test task's many candidates keep the sharpness a training task's few taught
+            logits = logits * jnp.log(jnp.maximum(candidate.sum(-1, keepdims=True), 2).astype(jnp.float32))
         # A large finite floor, not -inf: with nothing to look at, the softmax and its gradient stay finite.
         weights = jax.nn.softmax(jnp.where(candidate, logits, -1e9), axis=-1)
         weights = jnp.where(candidate.any(-1, keepdims=True), weights, 0.0)  # none to look at: zeros
@@ -80,9 +85,12 @@ class ObjectQMember(nn.Module):
     layer_norm: bool
     preference: float
     robot_features: tuple[int, int] | None  # the robot token's feature entries the MLP leaves out (None: none)
+    fixed_penalty: bool
+    log_scale: bool
 
     def encoder(self, **kwargs) -> ObjectAttention:
-        return ObjectAttention(max(self.hidden_sizes[0] // 4, 1), slice(*self.position), self.preference, **kwargs)
+        return ObjectAttention(max(self.hidden_sizes[0] // 4, 1), slice(*self.position), self.preference,
+                               self.fixed_penalty, self.log_scale, **kwargs)
 
     def tokens(self, observation: jax.Array) -> jax.Array:
         return observation.reshape(observation.shape[:-1] + (-1, self.token_width))
@@ -112,6 +120,8 @@ class ObjectQNetwork(nn.Module):
     position: tuple[int, int]
     preference: float
     robot_features: tuple[int, int] | None = None  # the robot's own features, left out of the MLP's input
+    fixed_penalty: bool = False
+    log_scale: bool = False
     hidden_sizes: Sequence[int] = (32, 32)
     activation: str = "leaky_relu"
     output_init: str = "zero"
@@ -120,7 +130,8 @@ class ObjectQNetwork(nn.Module):
 
     def fields(self) -> tuple:
         return (self.token_width, self.action_width, self.position, tuple(self.hidden_sizes), self.activation,
-                self.output_init, self.layer_norm, self.preference, self.robot_features)
+                self.output_init, self.layer_norm, self.preference, self.robot_features, self.fixed_penalty,
+                self.log_scale)
 
     @nn.compact
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
