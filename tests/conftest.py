@@ -31,14 +31,13 @@ def eval_main():
 # The costliest test files first, by their seconds on a fresh clone (`python -m pytest --durations=0`):
 # with `--dist loadfile` each file runs whole on one worker, in this order (`--no-loadscope-reorder`),
 # so a long file started last cannot leave the other worker idle at the end.
-COSTLIEST_FIRST = ("test_claims.py", "test_learning.py", "test_low_level.py", "test_devices.py", "test_doorknobs.py",
-                   "test_reliability.py", "test_distractors.py", "test_scale_out.py", "test_object_selection.py",
-                   "test_presets.py", "test_cli.py", "test_learners.py", "test_api.py", "test_safety.py",
-                   "test_plan_repair.py", "test_env_contract.py", "test_render.py", "test_multi_novelty.py",
-                   "test_faults.py", "test_coffee.py", "test_quickstart.py", "test_approaches.py",
-                   "test_meta_policy.py", "test_exploration.py", "test_sweep.py", "test_optim.py",
-                   "test_env_plugins.py", "test_settings.py", "test_signatures.py", "test_fix_length.py",
-                   "test_light_switch_door.py")
+COSTLIEST_FIRST = ("test_claims.py", "test_learning.py", "test_low_level.py", "test_learners.py", "test_doorknobs.py",
+                   "test_reliability.py", "test_object_selection.py", "test_scale_out.py", "test_cli.py", "test_api.py",
+                   "test_safety.py", "test_env_contract.py", "test_devices.py", "test_presets.py", "test_sweep.py",
+                   "test_optim.py", "test_approaches.py", "test_settings.py", "test_render.py", "test_faults.py",
+                   "test_multi_novelty.py", "test_env_plugins.py", "test_plan_repair.py", "test_coffee.py",
+                   "test_fix_length.py", "test_quickstart.py", "test_exploration.py", "test_signatures.py",
+                   "test_light_switch_door.py", "test_meta_policy.py", "test_distractors.py")
 
 
 def pytest_collection_modifyitems(items):
