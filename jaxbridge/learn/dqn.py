@@ -138,9 +138,9 @@ def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork
     if config.normalise is not Normalise.NONE:
         raise ValueError(f"approach {config.approach} does not scale its object tokens: no normalise")
     at_stall = config.attention_distance is AttentionDistance.STALL
-    hidden = None if config.attention_robot_features else robot_features(env)
+    left_out = None if config.attention_robot_features else robot_features(env)
     return ObjectQNetwork(token_width(env), env.num_skills + 2, token_position(env, at_stall),
-                          config.attention_preference, hidden, config.attention_fixed_penalty,
+                          config.attention_preference, left_out, config.attention_fixed_penalty,
                           config.attention_log_scale, config.hidden_sizes, config.activation, config.output_init,
                           ensemble=config.q_ensemble)
 

@@ -103,7 +103,7 @@ class ObjectQMember(nn.Module):
         attended, _ = self.encoder(name="attention")(tokens)
         robot = tokens[..., 0, :]
         if self.robot_features is not None:  # zeros in their place: the same layer shapes either way
-            robot = jnp.where(np.isin(np.arange(robot.shape[-1]), np.arange(*self.robot_features)), 0.0, robot)
+            robot = robot.at[..., slice(*self.robot_features)].set(0.0)
         # The robot's token and the attended one: the first layer's share of them once per observation,
         # however many candidate actions.
         seen = jnp.concatenate([robot, attended], -1)
