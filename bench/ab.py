@@ -6,6 +6,7 @@ Each commit is checked out into its own worktree (a clean tree, whatever this ch
 is a child process in that worktree with a cold, empty compilation cache of its own. The pairs run one
 after another (A then B), so a machine whose speed drifts over the day slows both sides alike; the
 figure is the median over pairs of B's wall time over A's. Prints one line per run and the ratio.
+`--keep DIR` keeps each run's output there (runs-A1, runs-B1, ...), e.g. to compare their results.
 """
 from __future__ import annotations
 
@@ -50,13 +51,16 @@ def main(argv=None) -> int:
     parser.add_argument("--base", required=True, help="commit A (the reference)")
     parser.add_argument("--head", default="HEAD", help="commit B (default: %(default)s)")
     parser.add_argument("--pairs", type=int, default=2, help="A/B pairs, back to back (default: %(default)s)")
+    parser.add_argument("--keep", type=Path, default=None, help="keep each run's output under this directory "
+                        "(default: deleted with the worktrees)")
     parser.add_argument("command", nargs="+", help="the script and its flags, e.g. train.py --env doorknobs --num-seeds 8")
     args = parser.parse_args(argv)
     commits = {"A": args.base, "B": args.head}
     with tempfile.TemporaryDirectory(prefix="jaxbridge-ab-") as tmp, checked_out(commits, Path(tmp)) as trees:
         ratios = []
         for pair in range(args.pairs):
-            runs = {side: timed(tree, args.command, Path(tmp) / f"runs-{side}{pair}") for side, tree in trees.items()}
+            runs = {side: timed(tree, args.command, (args.keep or Path(tmp)) / f"runs-{side}{pair + 1}")
+                    for side, tree in trees.items()}
             ratios.append(runs["B"]["wall_s"] / runs["A"]["wall_s"])
             for side, run in runs.items():
                 print(f"pair {pair + 1} {side} ({commits[side]}): {run['wall_s']:.0f} s, peak RSS "
