@@ -479,6 +479,31 @@ def test_a_split_learner_relabels_and_updates_as_the_unsplit_one():
     chex.assert_trees_all_close(updated[1], updated[0], atol=1e-5)
 
 
+def test_a_cycles_fit_perturbs_each_update_by_that_updates_own_noise():
+    """A cycle's fit draws its minibatch feature noise for all its updates at once: it fits as the same
+    updates made one at a time, each drawing its own noise (`update_step` without `noise`), to float
+    tolerance, and the noise reaches the fit (without it the parameters differ)."""
+    config = TrainConfig.for_env("light_switch_door", num_seeds=1, feature_noise=0.1, updates_per_cycle=6,
+                                 batch_size=16)
+    learning = make_setup(config).learner
+    item = dqn.empty_transition(learning)
+    n, k_features, k_targets = 40, *jax.random.split(jax.random.key(7))
+    items = jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), item)
+    items = items.replace(features=jax.random.normal(k_features, items.features.shape))
+    learner = init_learner(learning, jax.random.key(8))
+    learner = learner.replace(buffer=add(learner.buffer, items, jnp.ones(n, bool)), updates=jnp.int32(11))
+    targets = jax.random.uniform(k_targets, (learner.buffer.capacity,))
+    hyper = Hyper.of(config)
+    fitted = jax.jit(lambda l: dqn.fixed_updates(learning, hyper, l, targets, None)[0].params)
+    one_by_one = learner
+    for index in minibatch_indices(config, learner)[1]:
+        one_by_one = dqn.update_step(learning, hyper, one_by_one, targets, index)[0]
+    chex.assert_trees_all_close(fitted(learner), one_by_one.params, atol=1e-6)
+    quiet = replace(learning, config=replace(config, feature_noise=0.0))
+    unperturbed = dqn.fixed_updates(quiet, hyper, learner, targets, None)[0].params
+    assert not np.allclose(jax.tree.leaves(unperturbed)[0], jax.tree.leaves(one_by_one.params)[0], atol=1e-6)
+
+
 @pytest.mark.parametrize("preset", ["jaxbridge", "authors"])  # the authors': input scaling, a new Adam, early stopping
 def test_a_fit_leaves_out_the_weights_of_the_inputs_its_training_tasks_never_fill(preset):
     """Doorknobs trains on 2x2 maps and its full state has room for 5x5 ones: a fit trains only the weights
