@@ -13,8 +13,8 @@ not run again, and training resumes from its checkpoints):
      --test-protocol held_out [--cycle N]: doors with both locks; the training does not depend on the
      test tasks, so the bridges are those a run testing on them would train), and its final bridges on
      tasks holding one kind alone (KIND_TASKS per kind, the same for every seed): which kinds it solves;
-  4. python -m bench.training: seconds per cycle of each learned approach, one after another in one
-     process, as a ratio to ours'.
+  4. python -m bench.training: seconds per cycle of each learned approach, a cycle of each in turn in
+     one process, as a ratio to ours'.
 Writes into docs/results/multi_novelty/ (on a test-seed set its ledger row first; code with uncommitted
 changes is refused without --allow-dirty): STEM.csv, STEM_seeds.csv, STEM.png, STEM_sweep.csv/png (the
 test tasks' run, as the other studies' records), STEM_held_out.csv, STEM_kinds.csv and STEM.json (commit,

@@ -10,7 +10,7 @@ a token, attention choosing), written as committed records.
 
 Steps, each as a user runs it (child processes; wall time and peak memory recorded):
   1. python -m bench.training: seconds per cycle of ours and of the learned selector, 8 seeds x 20
-     cycles, one after the other in one process (their ratio is the cost bar's figure);
+     cycles, a cycle of each in turn in one process (their ratio is the cost bar's figure);
   2. train.py --env E --approaches ... --workers 1 on the test seeds (one after the other); on a
      distractor env (DISTRACTOR_ENVS) no_feature_selection too;
   3. eval.py RUN --sweep novelties: the final bridges on more and more novelties;

@@ -26,37 +26,56 @@ from jaxbridge.learn.setup import make_setup
 AUTHORS_WHOLE_RUN_S = authors_seed_run_s()  # one seed-run of the authors' "ours" (docs/results/authors_times.csv)
 
 
+class TimedTraining:
+    """One approach's training, timed a cycle at a time: its tasks and plans, placed learners and Cycle are
+    built on creation (`build_s`); `step()` runs one cycle and records its seconds and test solve rates."""
+
+    def __init__(self, config: TrainConfig, devices: list):
+        start = time.perf_counter()
+        self.config, self.setup = config, make_setup(config)
+        self.seeds = SeedMesh(config.num_seeds, tuple(devices), config.seed_block)
+        self.learners = self.seeds.place(self.setup.init_learners())
+        self.cycle = Cycle(self.setup, self.seeds)
+        self.build_s = time.perf_counter() - start
+        self.times, self.seed_rates = [], []
+
+    def step(self) -> None:
+        t0 = time.perf_counter()
+        self.learners, metrics = self.cycle(self.learners)
+        self.seed_rates.append(np.asarray(self.seeds.unpad(metrics).test_solve_rate))
+        self.times.append(time.perf_counter() - t0)
+
+    def result(self) -> dict:
+        """The times (build, each cycle, their total), each cycle's mean test solve rate ("rates") and per
+        seed ("seed_rates", float[seeds, cycles]), and the setup, seed layout and learners."""
+        return {"build_s": self.build_s, "times": self.times, "total_s": self.build_s + sum(self.times),
+                "rates": [float(r.mean()) for r in self.seed_rates], "seed_rates": np.array(self.seed_rates).T,
+                "setup": self.setup, "seeds": self.seeds, "learners": self.learners, "cycle": self.cycle}
+
+
 def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None) -> dict:
     """Build `config`'s setup with the seeds over `devices` and run `cycles` cycles (default:
-    config.cycles). Returns the times (build, each cycle), what JAX compiled in the first cycle and in
-    the later ones (jaxbridge.utils.compile_cache.CompileEvents), each cycle's mean test solve rate ("rates")
-    and per seed ("seed_rates", float[seeds, cycles]), and the setup, seed layout and final
-    learners (for further measurements)."""
+    config.cycles). Returns TimedTraining.result() with what JAX compiled in the first cycle ("first")
+    and in the later ones ("later"; jaxbridge.utils.compile_cache.CompileEvents)."""
     from jaxbridge.utils import compile_cache
 
-    start = time.perf_counter()
-    setup = make_setup(config)
-    seeds = SeedMesh(config.num_seeds, tuple(devices), config.seed_block)
-    learners = seeds.place(setup.init_learners())
-    cycle = Cycle(setup, seeds)
-    built = time.perf_counter()
-    times, seed_rates = [], []
-
-    def one(learners):
-        t0 = time.perf_counter()
-        learners, metrics = cycle(learners)
-        seed_rates.append(np.asarray(seeds.unpad(metrics).test_solve_rate))
-        times.append(time.perf_counter() - t0)
-        return learners
-
+    run = TimedTraining(config, devices)
     with compile_cache.record() as first:
-        learners = one(learners)
+        run.step()
     with compile_cache.record() as later:  # the later cycles' compilations (none: the cycle compiles once)
         for _ in range((cycles or config.cycles) - 1):
-            learners = one(learners)
-    return {"build_s": built - start, "times": times, "rates": [float(r.mean()) for r in seed_rates],
-            "seed_rates": np.array(seed_rates).T, "first": first, "later": later,
-            "total_s": time.perf_counter() - start, "setup": setup, "seeds": seeds, "learners": learners, "cycle": cycle}
+            run.step()
+    return {**run.result(), "first": first, "later": later}
+
+
+def measure_interleaved(configs: dict[str, TrainConfig], devices: list, cycles: int) -> dict[str, dict]:
+    """{name: TimedTraining.result()} of several trainings run a cycle of each in turn, so that a machine
+    whose speed drifts slows them alike (their ratios are then measured in one run)."""
+    runs = {name: TimedTraining(config, devices) for name, config in configs.items()}
+    for _ in range(cycles):
+        for run in runs.values():
+            run.step()
+    return {name: run.result() for name, run in runs.items()}
 
 
 def config_override(text: str) -> tuple[str, object]:
@@ -101,19 +120,19 @@ def main() -> None:
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
-    parser.add_argument("--approach", default="ours", help="which approach, or a comma-separated list measured one "
-                        "after the other, each one's steady-state cost then given as a ratio to the first's "
+    parser.add_argument("--approach", default="ours", help="which approach, or a comma-separated list trained a "
+                        "cycle of each in turn, each one's steady-state cost then given as a ratio to the first's "
                         "(default: %(default)s)")
     parser.add_argument("overrides", nargs="*", type=config_override,
                         help="TrainConfig fields as name=value, e.g. feature_noise=0")
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
     print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s), seed block {args.seed_block}")
-    steady = {}
-    for approach in args.approach.split(","):
-        config, _ = with_overrides(TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles,
-                                                       seed_block=args.seed_block, approach=approach), args.overrides)
-        steady[approach] = report(config, measure_cycles(config, seeds_over))
+    configs = {approach: with_overrides(TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles,
+                                                            seed_block=args.seed_block, approach=approach),
+                                        args.overrides)[0] for approach in args.approach.split(",")}
+    runs = measure_interleaved(configs, seeds_over, args.cycles)
+    steady = {approach: report(configs[approach], run) for approach, run in runs.items()}
     first = next(iter(steady))
     for approach, seconds in list(steady.items())[1:]:
         print(f"{approach}: {seconds / steady[first]:.2f}x {first}'s steady-state seconds per cycle")
