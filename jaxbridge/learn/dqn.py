@@ -259,12 +259,12 @@ def fit_scaling(dqn: DQN, buffer: ReplayBuffer, targets: jax.Array, task: TaskPa
             "y_shift": jnp.where(empty, 0.0, y_low), "y_scale": jnp.where(empty, 1.0, jnp.maximum(y_high - y_low, 1.0))}
 
 
-def minibatch_noise(learner: DQNState, updates: jax.Array, shape: tuple) -> jax.Array:
+def minibatch_noise(key: jax.Array, updates: jax.Array, shape: tuple) -> jax.Array:
     """Standard normal noise for the minibatch features of the updates numbered `updates` [n]: [n, *shape],
-    update u's own draw from the learner's key folded with u (a fresh draw per update). Drawn for a
+    update u's own draw from the learner's `key` folded with u (a fresh draw per update). Drawn for a
     cycle's updates at once, the same numbers as one draw per update at a third less cost: threefry's
     lowering costs per call, and a draw per update was a fifth of Doorknobs' update."""
-    return jax.vmap(lambda u: jax.random.normal(jax.random.fold_in(learner.key, u), shape))(updates)
+    return jax.vmap(lambda u: jax.random.normal(jax.random.fold_in(key, u), shape))(updates)
 
 
 def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, index: jax.Array,
@@ -277,7 +277,7 @@ def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, i
     features = batch.features
     if config.feature_noise > 0:
         if noise is None:
-            noise = minibatch_noise(learner, learner.updates[None], features.shape)[0]
+            noise = minibatch_noise(learner.key, learner.updates[None], features.shape)[0]
         features = features + config.feature_noise * noise
 
     def loss_fn(params):
@@ -392,7 +392,7 @@ def fixed_updates(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,
 
     config = dqn.config
     key, indices = minibatch_indices(config, learner)
-    noise = (minibatch_noise(learner, learner.updates + jnp.arange(config.updates_per_cycle),
+    noise = (minibatch_noise(learner.key, learner.updates + jnp.arange(config.updates_per_cycle),
                              indices.shape[1:] + (dqn.stored_features,)) if config.feature_noise > 0 else None)
     learner, (losses, q_abs) = jax.lax.scan(body, learner, (indices, noise))
     learner = learner.replace(key=jnp.where(ready, key, learner.key))

@@ -20,7 +20,7 @@ from flax import struct
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import Normalise, PQNSettings, learner_settings
-from jaxbridge.learn.dqn import q_network
+from jaxbridge.learn.dqn import minibatch_noise, q_network
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import QNetwork, batch_input, best_candidate, candidate_skills, input_size
@@ -103,7 +103,7 @@ class PQN:
         env, net, noise = self.env, self.net, self.config.learner.feature_noise
         features = batch.features
         if noise > 0:  # as double DQN's (TrainConfig.feature_noise): a fresh draw per update
-            features = features + noise * jax.random.normal(jax.random.fold_in(state.key, state.updates), features.shape)
+            features = features + noise * minibatch_noise(state.key, state.updates[None], features.shape)[0]
 
         def loss_fn(params):
             q = net.apply(params, batch_input(env, features, batch.skill, batch.param), members=True)
