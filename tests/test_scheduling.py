@@ -1,7 +1,7 @@
 """The experiment's devices: programs take shares of them, a running program takes the spare ones once
 no program waits and they pay for their compile (run/scheduling.py). That a widened program's numbers
 are those of one device: tests/test_devices.py."""
-from jaxbridge.run.scheduling import DevicePool, worth_widening
+from jaxbridge.run.scheduling import CycleTimes, DevicePool, worth_widening
 
 
 class Device:
@@ -48,3 +48,18 @@ def test_more_devices_are_taken_when_the_cycles_left_pay_for_the_compile():
     assert not worth_widening(8, 4, cycles_left=5, cycle_s=3.0, compile_s=20.0)  # saves 7.5 s
     assert not worth_widening(1, 1, cycles_left=99, cycle_s=9.0, compile_s=0.0)  # one seed: nothing to share
     assert worth_widening(3, 2, cycles_left=10, cycle_s=3.0, compile_s=1.0)  # 3 seeds on 2 devices: 2 each
+
+
+def test_widening_is_judged_by_a_cycle_run_with_the_spare_devices_idle():
+    times = CycleTimes()
+    times.timed(15.0)  # compiles
+    times.timed(0.5)  # shared the cores with another program: would save 25 s over 100 cycles
+    assert not times.worth_widening(8, 4, cycles_left=100)  # offered for the first time: time one more
+    times.timed(0.06)  # alone: saves 3 s, while compiling again costs about 15
+    assert not times.worth_widening(8, 4, cycles_left=99)
+    times.timed(0.6)
+    assert times.worth_widening(8, 4, cycles_left=98)  # saves 29 s
+    times.recompiled()  # widened: its next cycle compiles, and new spares are timed again before judging
+    times.timed(14.0)
+    times.timed(0.3)
+    assert not times.worth_widening(4, 2, cycles_left=96)

@@ -19,7 +19,7 @@ from jaxbridge.run import checkpoint
 from jaxbridge.run.run_state import (Checkpointer, Done, RunGroup, check_checkpoint_belongs, fresh_start, load_config,
                                      restored, write_run_files)
 from jaxbridge.run.hooks import RunHooks
-from jaxbridge.run.scheduling import worth_widening
+from jaxbridge.run.scheduling import CycleTimes
 from jaxbridge.run.tensorboard import CycleEvents
 from jaxbridge.utils.files import WriteError
 from jaxbridge.utils.progress import cycle_progress
@@ -93,19 +93,19 @@ class SlotProgram:
 
     def __init__(self, group: RunGroup):
         self.group, self.cycle = group, Cycle(group.setup, group.slots, group.configs)
-        self.first_s = self.last_s = None
+        self.times = CycleTimes()
         self.compiling_s, self.device_s, self.seed_cycles = 0.0, 0.0, 0  # for the pace (`pace`)
 
     def next_cycle(self, done: Done, c: int, fault_injection: Callable | None, last_saved: int) -> Done:
         start = time.perf_counter()
         done = next_cycle(self.cycle, self.group, done, c, fault_injection, last_saved)
-        self.last_s = time.perf_counter() - start
-        if self.first_s is None:
-            self.first_s = self.last_s
-            self.compiling_s += self.last_s
+        seconds = time.perf_counter() - start
+        if self.times.first_s is None:
+            self.compiling_s += seconds
         else:
-            self.device_s += self.last_s * self.group.slots.num_devices
+            self.device_s += seconds * self.group.slots.num_devices
             self.seed_cycles += self.group.slots.num_seeds
+        self.times.timed(seconds)
         return done
 
     def pace(self) -> dict | None:
@@ -124,15 +124,12 @@ class SlotProgram:
         def per_device(more: int) -> int:  # seeds one after another on each device, with `more` devices
             return SeedMesh(old.num_seeds, old.devices + (None,) * more, old.block).padded // (old.num_devices + more)
 
-        def wanted(count: int) -> bool:
-            compile_s = max(self.first_s - self.last_s, 0.0)
-            return worth_widening(per_device(0), per_device(count), cycles_left, self.last_s, compile_s)
-
-        more = widen(wanted)
+        more = widen(lambda count: self.times.worth_widening(per_device(0), per_device(count), cycles_left))
         if not more:
             return done
         self.group = dataclasses.replace(self.group, slots=SeedMesh(old.num_seeds, old.devices + tuple(more), old.block))
-        self.cycle, self.first_s = Cycle(self.group.setup, self.group.slots, self.group.configs), None
+        self.cycle = Cycle(self.group.setup, self.group.slots, self.group.configs)
+        self.times.recompiled()
         return Done(self.group.slots.place(old.unpad(done.learners)), done.histories)
 
 

@@ -18,6 +18,34 @@ def worth_widening(per_device: int, per_device_wider: int, cycles_left: int, cyc
     return per_device_wider < per_device and saved > 2 * compile_s
 
 
+class CycleTimes:
+    """A program's cycle seconds, for `worth_widening`: its first since it compiled, and its last. The
+    last counts only once it ran whole with the spare devices idle (`idle_pace`): on a CPU a one-device
+    program's threads spread onto idle cores, so a cycle timed while another program held them would
+    overstate what widening saves."""
+
+    def __init__(self):
+        self.first_s = self.last_s = None
+        self.spare_seen = False  # spare devices were offered; the next cycle is timed with them idle
+
+    def timed(self, seconds: float) -> None:
+        self.last_s = seconds
+        if self.first_s is None:
+            self.first_s = seconds
+
+    def worth_widening(self, per_device: int, per_device_wider: int, cycles_left: int) -> bool:
+        """No when the spare devices are offered for the first time (the cycle just timed shared them);
+        after that, `worth_widening` with the last cycle's seconds and the first's excess as the compile."""
+        if not self.spare_seen:
+            self.spare_seen = True
+            return False
+        compile_s = max(self.first_s - self.last_s, 0.0)
+        return worth_widening(per_device, per_device_wider, cycles_left, self.last_s, compile_s)
+
+    def recompiled(self) -> None:
+        self.first_s, self.spare_seen = None, False
+
+
 class DevicePool:
     """The shares of the devices that an experiment's `programs` train on: `take` one to start (waiting
     for one to come back if none is free), `give_back` them at the end; `spare` hands the free shares to
