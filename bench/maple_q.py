@@ -1,7 +1,7 @@
 """Where Maple Q's cycle goes, beside ours': one seed on one device, each part of its cycle timed alone,
-into docs/results/ENV/maple_q_profile.json.
+into docs/results/ENV/maple_q_profile.json (or --out).
 
-    python -m bench.maple_q [--env doorknobs] [--approaches ours,maple_q] [--warmup 5] [--repeats 5]
+    python -m bench.maple_q [--env doorknobs] [--approaches ours,maple_q] [--warmup 5] [--repeats 5] [--out FILE]
 
 Per approach, after --warmup cycles of the run's own Cycle (one seed, one device): what the bridge sees and
 the replay buffer keeps (the observation's width, the stored entries, bytes per seed); per cycle (mean over
@@ -24,6 +24,7 @@ import statistics
 import sys
 import time
 from functools import partial
+from pathlib import Path
 from typing import Callable
 
 import jax
@@ -158,6 +159,9 @@ def main(argv=None) -> int:
     parser.add_argument("--warmup", type=int, default=5, help="cycles before the parts are timed (default: %(default)s)")
     parser.add_argument("--repeats", type=int, default=5, help="timed rounds (default: %(default)s)")
     parser.add_argument("--fill", type=int, default=16384, help="bench.update_parts's buffer fill (default: %(default)s)")
+    parser.add_argument("--out", type=Path, help="write the record here instead (default: docs/results/ENV/"
+                        "maple_q_profile.json, which PERFORMANCE renders, for the default --approaches; with others "
+                        "the record is only printed)")
     parser.add_argument("--allow-dirty", action="store_true",
                         help=f"profile code with uncommitted changes: the record goes to {DIRTY_RECORDS.relative_to(ROOT)}/, not docs/")
     args = parser.parse_args(argv)
@@ -168,7 +172,13 @@ def main(argv=None) -> int:
               "command": "python -m bench.maple_q " + " ".join(argv if argv is not None else sys.argv[1:]),
               "machine": machine()}
     print(json.dumps(record, indent=2))
-    path = (DIRTY_RECORDS if changed else RECORDS) / args.env / "maple_q_profile.json"
+    path = args.out or RECORDS / args.env / "maple_q_profile.json"
+    if changed:  # a record of uncommitted code never lands in docs/
+        path = DIRTY_RECORDS / args.env / path.name
+    if args.out is None and args.approaches != parser.get_default("approaches"):
+        print("bench.maple_q: other approaches than PERFORMANCE's record: printed only (--out FILE keeps it)",
+              file=sys.stderr)
+        return 0
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(record, indent=2) + "\n")
     print(f"bench.maple_q: -> {shown(path)}", file=sys.stderr)
