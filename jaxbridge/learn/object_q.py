@@ -137,9 +137,9 @@ class ObjectQNetwork(nn.Module):
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
         if self.ensemble == 1:
             q = ObjectQMember(*self.fields(), name="member")(None, x)[1][None]
-        else:  # one after another (a scan over stacked parameters), as QNetwork's members, for the same reason
+        else:  # one after another (a scan over stacked parameters, unrolled), as QNetwork's members, for the same reasons
             scan = nn.scan(ObjectQMember, variable_axes={"params": 0}, split_rngs={"params": True},
-                           in_axes=nn.broadcast, length=self.ensemble)
+                           in_axes=nn.broadcast, length=self.ensemble, unroll=self.ensemble)
             _, q = scan(*self.fields(), name="members")(None, x)
         return q if members else jnp.min(q, axis=0)
 
