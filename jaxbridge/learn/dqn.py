@@ -380,22 +380,23 @@ def fixed_updates(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,
                   task: TaskPart | None) -> tuple[DQNState, jax.Array, jax.Array]:
     """Ours' fit: exactly `updates_per_cycle` minibatch updates (none take effect while the buffer is
     empty). Returns as `learn`."""
-    ready = learner.buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
+    buffer = learner.buffer  # read by every update, written by none: outside the loop's carry
+    ready = buffer.size > 0  # nothing stored yet (no decision so far): no update takes effect
 
-    def body(learner, draws):
+    def body(fitted, draws):
         index, noise = draws
-        updated, (loss, q_abs_max) = update_step(dqn, hyper, learner, targets, index, task, noise)
+        updated, (loss, q_abs_max) = update_step(dqn, hyper, fitted.replace(buffer=buffer), targets, index, task, noise)
         stats = (jnp.where(ready, loss, 0.0), jnp.where(ready, q_abs_max, 0.0))
         # Selecting per update rather than once after the scan: the same values, but XLA fuses the
         # update differently without it and the last bits change (the runs in docs/ would not reproduce).
-        return jax.tree.map(lambda a, b: jnp.where(ready, a, b), updated, learner), stats
+        return jax.tree.map(lambda a, b: jnp.where(ready, a, b), updated.replace(buffer=None), fitted), stats
 
     config = dqn.config
     key, indices = minibatch_indices(config, learner)
     noise = (minibatch_noise(learner.key, learner.updates + jnp.arange(config.updates_per_cycle),
                              indices.shape[1:] + (dqn.stored_features,)) if config.feature_noise > 0 else None)
-    learner, (losses, q_abs) = jax.lax.scan(body, learner, (indices, noise))
-    learner = learner.replace(key=jnp.where(ready, key, learner.key))
+    fitted, (losses, q_abs) = jax.lax.scan(body, learner.replace(buffer=None), (indices, noise))
+    learner = fitted.replace(buffer=buffer, key=jnp.where(ready, key, learner.key))
     return learner, jnp.mean(losses), jnp.max(q_abs)
 
 
