@@ -176,6 +176,18 @@ def test_feature_noise_fits_the_neighbourhood_of_a_stored_state_not_only_the_poi
     assert error[0.2] < 0.5 * error[0.0], error
 
 
+def test_ensembles_traced_in_worker_threads_share_one_scanned_member_class():
+    """Approaches train in threads; flax builds a scanned class from its member's dataclass fields, which
+    raced when two programs traced an ensemble at once. The class is built once per (member, length)."""
+    from concurrent.futures import ThreadPoolExecutor
+    from jaxbridge.learn.object_q import ObjectQMember
+    from jaxbridge.learn.q_bridge import _Member, members_scan
+    with ThreadPoolExecutor(4) as pool:
+        built = list(pool.map(lambda i: members_scan((_Member, ObjectQMember)[i % 2], 2), range(8)))
+    assert len({id(c) for c in built[0::2]}) == 1 and len({id(c) for c in built[1::2]}) == 1
+    assert built[0] is not built[1] and members_scan(_Member, 3) is not built[0]
+
+
 @pytest.mark.parametrize("ensemble", [1, 2])
 def test_a_wide_observation_is_split_off_the_candidates_without_changing_q_or_the_choice(ensemble):
     """Full-state observations (>= SPLIT_FROM_FEATURES values) go in as a SplitInput: the same parameters,

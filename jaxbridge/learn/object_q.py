@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxbridge.core.observations import token_slots
-from jaxbridge.learn.q_bridge import SplitInput, UniformDense, mlp, uniform_params
+from jaxbridge.learn.q_bridge import SplitInput, UniformDense, members_scan, mlp, uniform_params
 
 
 class KeyScores(nn.Module):
@@ -137,10 +137,8 @@ class ObjectQNetwork(nn.Module):
     def __call__(self, x: jax.Array | SplitInput, members: bool = False) -> jax.Array:
         if self.ensemble == 1:
             q = ObjectQMember(*self.fields(), name="member")(None, x)[1][None]
-        else:  # one after another (a scan over stacked parameters, unrolled), as QNetwork's members, for the same reasons
-            scan = nn.scan(ObjectQMember, variable_axes={"params": 0}, split_rngs={"params": True},
-                           in_axes=nn.broadcast, length=self.ensemble, unroll=self.ensemble)
-            _, q = scan(*self.fields(), name="members")(None, x)
+        else:  # one after another, as QNetwork's members, for the same reasons
+            _, q = members_scan(ObjectQMember, self.ensemble)(*self.fields(), name="members")(None, x)
         return q if members else jnp.min(q, axis=0)
 
 

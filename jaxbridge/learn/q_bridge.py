@@ -7,6 +7,8 @@ epsilon-greedily with the random bridge.
 """
 from __future__ import annotations
 
+import functools
+import threading
 from dataclasses import dataclass
 from typing import Any, Sequence
 
@@ -157,6 +159,24 @@ class _Member(nn.Module):
         return carry, mlp(x, self.hidden_sizes, self.activation, self.output_init, self.layer_norm)
 
 
+_SCAN_LOCK = threading.Lock()
+
+
+def members_scan(member: type[nn.Module], length: int) -> type[nn.Module]:
+    """`member` as an ensemble of `length`, one member after another (a scan over their stacked parameters,
+    unrolled: a loop's own overhead was 40% of two members' forward and backward pass on a CPU). Built once
+    per (member, length) under a lock: flax builds the scanned class from the member's dataclass fields,
+    and two approaches' programs traced at once in worker threads raced on them."""
+    with _SCAN_LOCK:
+        return _members_scan(member, length)
+
+
+@functools.cache
+def _members_scan(member: type[nn.Module], length: int) -> type[nn.Module]:
+    return nn.scan(member, variable_axes={"params": 0}, split_rngs={"params": True}, in_axes=nn.broadcast,
+                   length=length, unroll=length)
+
+
 def scaled_input(x: jax.Array | SplitInput, shift: jax.Array, scale: jax.Array) -> jax.Array | SplitInput:
     """(x - shift) / scale per entry of the whole input [I] (a SplitInput's parts each by their rows)."""
     if not isinstance(x, SplitInput):
@@ -206,13 +226,11 @@ class QNetwork(nn.Module):
         if self.ensemble == 1:  # the plain network, parameters laid out as before ensembles existed
             q = mlp(x, self.hidden_sizes, self.activation, self.output_init, self.layer_norm)[None]
         else:
-            # Members one after another (a scan over their stacked parameters), not vmapped: a member
-            # axis inside the per-seed program made XLA compile the gradient differently with the
-            # number of devices (docs/RELIABILITY.md); each member alone compiles as the plain network.
-            # Unrolled: a loop's own overhead was 40% of two members' forward and backward pass on a CPU.
-            members_scan = nn.scan(_Member, variable_axes={"params": 0}, split_rngs={"params": True},
-                                   in_axes=nn.broadcast, length=self.ensemble, unroll=self.ensemble)
-            _, q = members_scan(self.hidden_sizes, self.activation, self.output_init, self.layer_norm)(None, x)
+            # Members one after another, not vmapped: a member axis inside the per-seed program made XLA
+            # compile the gradient differently with the number of devices (docs/RELIABILITY.md); each
+            # member alone compiles as the plain network.
+            scanned = members_scan(_Member, self.ensemble)
+            _, q = scanned(self.hidden_sizes, self.activation, self.output_init, self.layer_norm)(None, x)
         return q if members else jnp.min(q, axis=0)
 
 
