@@ -2,7 +2,7 @@
 --fill transitions, microseconds per minibatch update for `dqn.learn` as a whole and for each part.
 
     python -m bench.update_parts [--env light_switch_door] [--approaches ours,no_feature_selection,maple_q]
-                                 [--fill 16384] [--updates 1000]
+                                 [--fill 16384] [--updates 1000] [--set NAME=VALUE ...]
 
 The full-state ablations are measured twice, with their task-constant entries split off (the default,
 `split_task_state`) and whole. Parts (each jitted alone, over --updates iterations, after a compiling call): the minibatch draws
@@ -17,18 +17,20 @@ parts do not add up to the whole exactly: XLA fuses across them in `learn`.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 import jax
 import jax.numpy as jnp
 import optax
 
+import jaxbridge
 from jaxbridge.learn import dqn
-from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.q_bridge import SplitInput, at_task, batch_input, input_rows
+from jaxbridge.utils.cli import run_main
 
 
 def _seconds(fn, arg) -> float:
@@ -39,9 +41,10 @@ def _seconds(fn, arg) -> float:
     return time.perf_counter() - start
 
 
-def measure(env_name: str, approach: str, fill: int, updates: int, split: bool = True) -> dict:
-    config = TrainConfig.for_env(env_name, approach=approach, num_seeds=1, updates_per_cycle=updates,
-                                 split_task_state=split)
+def measure(env_name: str, approach: str, fill: int, updates: int, split: bool = True,
+            settings: list[str] | None = None) -> dict:
+    config = jaxbridge.make_config(env_name, seeds=1, approach=approach, updates_per_cycle=updates,
+                                   split_task_state=split, settings=settings)
     setup = make_setup(config)
     env, learning = setup.train_env, setup.learner
     tasks = setup.train.arrays.tasks  # the seed's training tasks, which a split buffer's `task` indexes
@@ -96,16 +99,18 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
     }
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--approaches", default="ours,no_feature_selection,maple_q",
                         help="comma-separated approaches (default: %(default)s)")
     parser.add_argument("--fill", type=int, default=16384, help="stored transitions (default: %(default)s)")
     parser.add_argument("--updates", type=int, default=1000, help="updates per timed call (default: %(default)s)")
-    args = parser.parse_args()
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="a setting of the runs measured, as train.py's --set (e.g. feature_noise=0)")
+    args = parser.parse_args(argv)
     print(f"jax {jax.__version__}, one {jax.devices()[0].platform} device, {args.env}, buffer filled to {args.fill}, "
-          f"us per update")
+          f"us per update" + "".join(f", {s}" for s in args.set))
     columns = ["input", "learn_us", "relabel_ms", "draws_us", "gather_encode_us", "forward_backward_us",
                "dense_fb_us", "adam_us", "polyak_us"]
     print("| approach | " + " | ".join(columns) + " |")
@@ -114,11 +119,11 @@ def main() -> None:
         # The full-state ablations twice: their task-constant entries split off (the default), and whole.
         splits = (True, False) if get_approach(approach).controls.observation.whole_state else (True,)
         for split in splits:
-            row = measure(args.env, approach, args.fill, args.updates, split)
+            row = measure(args.env, approach, args.fill, args.updates, split, args.set)
             label = approach + ("" if len(splits) == 1 else " (split)" if split else " (whole)")
             print(f"| {label} | " + " | ".join(f"{row[c]:.1f}" if c != "input" else str(row[c]) for c in columns)
                   + " |", flush=True)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_main(main))
