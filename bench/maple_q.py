@@ -172,13 +172,13 @@ def main(argv=None) -> int:
               "command": "python -m bench.maple_q " + " ".join(argv if argv is not None else sys.argv[1:]),
               "machine": machine()}
     print(json.dumps(record, indent=2))
-    path = args.out or RECORDS / args.env / "maple_q_profile.json"
-    if changed:  # a record of uncommitted code never lands in docs/
-        path = DIRTY_RECORDS / args.env / path.name
     if args.out is None and args.approaches != parser.get_default("approaches"):
         print("bench.maple_q: other approaches than PERFORMANCE's record: printed only (--out FILE keeps it)",
               file=sys.stderr)
         return 0
+    path = args.out or RECORDS / args.env / "maple_q_profile.json"
+    if changed:  # a record of uncommitted code never lands in docs/
+        path = DIRTY_RECORDS / args.env / path.name
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(record, indent=2) + "\n")
     print(f"bench.maple_q: -> {shown(path)}", file=sys.stderr)

@@ -20,7 +20,7 @@ def worth_widening(per_device: int, per_device_wider: int, cycles_left: int, cyc
 
 class CycleTimes:
     """A program's cycle seconds, for `worth_widening`: its first since it compiled, and its last. The
-    last counts only once it ran whole with the spare devices idle (`idle_pace`): on a CPU a one-device
+    last counts only once it ran whole with the spare devices idle: on a CPU a one-device
     program's threads spread onto idle cores, so a cycle timed while another program held them would
     overstate what widening saves."""
 
