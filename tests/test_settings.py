@@ -86,7 +86,7 @@ def test_every_older_config_version_loads_as_it_was_trained():
                             "count_bonus": 0.0, "keep_cycles": [], "attention_fixed_penalty": False,
                             "attention_log_scale": False,  # added later: their defaults, what the run had
                             "attention_distance": "now", "attention_preference": 4.0,  # not the defaults: what it had
-                            "attention_robot_features": True}
+                            "attention_robot_features": True, "attention_kind_noise": True}
     pqn = TrainConfig(learner="pqn", q_lambda=0.3, pqn_epochs=8)
     assert TrainConfig.from_dict({**flat(pqn), "batch_size": 64, "polyak_tau": 0.01}) == pqn  # DQN's fields dropped
     v1 = {k: v for k, v in v11.items() if k not in ("approach", "split_task_state", "learner", "q_lambda", "loop_guard")}

@@ -24,8 +24,9 @@ from jaxbridge.core.settings import Settings, described, setting
 # `attention_preference` (older learned selectors read the distance now, with a preference bound of 4),
 # `keep_cycles` (older runs kept the latest two checkpoints alone); 14: `attention_robot_features` (older
 # learned selectors' Q-networks read the robot's own features), `attention_fixed_penalty`,
-# `attention_log_scale` (older ones had neither: their defaults)
-CONFIG_VERSION = 14
+# `attention_log_scale` (older ones had neither: their defaults); 15: `attention_kind_noise` (older learned
+# selectors' feature noise perturbed every token entry)
+CONFIG_VERSION = 15
 NESTED_SINCE = 12
 
 
@@ -159,6 +160,8 @@ class TrainConfig(Settings):
             learner = {"attention_distance": "now", "attention_preference": 4.0, **learner}
         if version < 14 and "attention_robot_features" in _names(settings):
             learner = {"attention_robot_features": True, **learner}
+        if version < 15 and "attention_kind_noise" in _names(settings):
+            learner = {"attention_kind_noise": True, **learner}
         unknown = (set(data) - set(_OWN)) | {f"learner.{k}" for k in set(learner) - set(_names(settings))}
         if unknown:
             raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")

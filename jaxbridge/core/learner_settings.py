@@ -95,6 +95,10 @@ class QSettings(LearnerSettings):
     """Learned selection only: attention's penalty per unit of distance stays at its start (16) instead of
     being learned, so that a preference passes over a nearer object only within its bound's reach
     (attention_preference / 16 squashed units). Tried on development seeds (docs/design/approaches.md)."""
+    attention_kind_noise: bool = False
+    """Learned selection only: `feature_noise` also perturbs each token's type one-hot and interactable flag.
+    Off (ours): it perturbs what measures an object, its features and offsets, and what an object is stays
+    exact (ours' features have no such entries). Chosen on development seeds (docs/design/approaches.md)."""
     attention_log_scale: bool = False
     """Learned selection only: attention's logits times the log of the number of candidates (a scalable
     softmax), so that a test task's many objects do not spread what a training task's few sharpened. Tried

@@ -42,6 +42,13 @@ def token_position(env: NoveltyEnv, at_stall: bool) -> tuple[int, int]:
     return start, start + POSITION_DIM
 
 
+def token_measured_entries(env: NoveltyEnv) -> np.ndarray:
+    """The entries of `object_tokens` that measure an object (its features and offsets), not those that say
+    what it is (its type's one-hot, interactable): the ones feature noise perturbs."""
+    width, kinds = token_width(env), len(env.object_types)
+    return (np.arange(len(token_slots(env)))[:, None] * width + np.arange(kinds, width - 1)).reshape(-1)
+
+
 def robot_features(env: NoveltyEnv) -> tuple[int, int] | None:
     """(start, end): where the robot's token holds the robot's own features (after its type's one-hot); None
     where the robot's type has none (every env but Coffee's)."""

@@ -14,13 +14,14 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optax
 from flax import struct
 
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import Normalise, PQNSettings, learner_settings
-from jaxbridge.learn.dqn import minibatch_noise, q_network
+from jaxbridge.learn.dqn import feature_noise_entries, minibatch_noise, noise_shape, q_network, with_noise
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import QNetwork, batch_input, best_candidate, candidate_skills, input_size
@@ -47,6 +48,7 @@ class PQN:
     net: QNetwork  # with LayerNorm
     optimizer: optax.GradientTransformationExtraArgs
     num_features: int
+    noise_entries: np.ndarray | None = None  # the observation entries feature noise perturbs (None: all)
     shares_network: bool = True  # one copy of the network for a rollout's episodes
 
     def init(self, key: jax.Array) -> PQNState:
@@ -103,7 +105,8 @@ class PQN:
         env, net, noise = self.env, self.net, self.config.learner.feature_noise
         features = batch.features
         if noise > 0:  # as double DQN's (TrainConfig.feature_noise): a fresh draw per update
-            features = features + noise * minibatch_noise(state.key, state.updates[None], features.shape)[0]
+            draw = minibatch_noise(state.key, state.updates[None], noise_shape(features.shape, self.noise_entries))[0]
+            features = with_noise(features, noise * draw, self.noise_entries)
 
         def loss_fn(params):
             q = net.apply(params, batch_input(env, features, batch.skill, batch.param), members=True)
@@ -152,4 +155,5 @@ def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_s
     """The learner registry's factory: double DQN's network with LayerNorm; the same optimiser."""
     if config.learner.normalise is not Normalise.NONE:
         raise ValueError("learner pqn does not support normalise (set by the config or its preset)")
-    return PQN(env, config, replace(q_network(config, env), layer_norm=True), clipped_adam(), num_features)
+    return PQN(env, config, replace(q_network(config, env), layer_norm=True), clipped_adam(), num_features,
+               feature_noise_entries(config, env))
