@@ -11,8 +11,8 @@ a token, attention choosing), written as committed records.
 Steps, each as a user runs it (child processes; wall time and peak memory recorded):
   1. python -m bench.training: seconds per cycle of ours and of the learned selector, 8 seeds x 20
      cycles, a cycle of each in turn in one process (their ratio is the cost bar's figure);
-  2. train.py --env E --approaches ... --workers 1 on the test seeds (one after the other); on a
-     distractor env (DISTRACTOR_ENVS) no_feature_selection too;
+  2. train.py --env E --approaches ... on the test seeds (side by side, as train.py schedules them); on
+     a distractor env (DISTRACTOR_ENVS) no_feature_selection too;
   3. eval.py RUN --sweep novelties: the final bridges on more and more novelties;
   4. eval.py RUN --approach ours_learned_selection --attention: how often its most attended object at a
      bridge decision is the one the env's fix acts on; with --cycle N, the same of the checkpoints that
@@ -55,7 +55,7 @@ def main(argv=None) -> int:
                                                 "--cycles", str(COST_CYCLES), "--approach", "ours,ours_learned_selection"],
                                                keep_stdout=True))
     kept = [c for c in CYCLES if c < args.cycles]  # the table's earlier cycles: attention over training
-    flags = ["--env", env, "--approaches", ",".join(names), "--workers", "1", *seed_flags(args)]
+    flags = ["--env", env, "--approaches", ",".join(names), *seed_flags(args)]
     train = steps.run("train", lambda: train_step(run, flags + (["--keep-cycles", ",".join(map(str, kept))] if kept else [])))
     sweep = steps.run("sweep", lambda: run_child(["python", "eval.py", shown(run), "--sweep", "novelties"]))
     looked = {c: steps.run(f"attention_{c}", lambda c=c: attention_at(run, ["--cycle", str(c)])) for c in kept}

@@ -130,3 +130,25 @@ def test_a_command_on_development_or_test_seeds_writes_a_row_only_for_a_test_set
     (row,) = ledger.rows()
     assert (row["seeds"], row["env"], row["ran"]) == ("300-331", "multi_novelty",
                                                       "python -m bench.multi_novelty --seeds 300-331 --cycles 50")
+
+
+def test_the_one_regeneration_runs_the_command_of_every_committed_study_record():
+    """bench.regenerate's steps are every study's bench command: a study added without a step fails here
+    (performance records are re-measured at HEAD by their own commands, not regenerated)."""
+    from bench import regenerate
+    performance = ("python -m pytest", "bash bench/gpu.sh", "python -m bench.maple_q")
+    made = {" ".join(["python", "-m", *module]) for _, module, _ in regenerate.STEPS}
+    for path in sorted(RECORDS.glob("**/*.json")):
+        record = json.loads(path.read_text())
+        command = record.get("command") if isinstance(record, dict) else None
+        if command and not command.startswith(performance):
+            assert command in made, f"{path}: bench.regenerate has no step '{command}'"
+    on_test_seeds = {" ".join(module) for _, module, test in regenerate.STEPS if test}
+    assert {"bench.paper --env coffee", "bench.selection --env doorknobs_distractor"} <= on_test_seeds
+
+
+def test_the_regeneration_refuses_to_start_without_its_ledger_reasons(capsys):
+    from bench import regenerate
+    with pytest.raises(SystemExit) as stopped:
+        regenerate.main(["--change", "a rerun"])
+    assert stopped.value.code == 2 and "--chosen-on" in capsys.readouterr().err
