@@ -364,7 +364,9 @@ def selection(env: str) -> str:
     lines = [f"Test seeds {run['seeds']}, {last} cycles; each cell: mean [95% CI] over seeds, IQM [95% CI] beside it.",
              "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
-    lines += ["", "| approach | cycles to a mean of 0.9 | seconds per cycle (its training's wall time / cycles) |",
+    layout = "one at a time" if "--workers 1" in run["steps"]["train"]["command"] else "side by side"
+    lines += ["", f"| approach | cycles to a mean of 0.9 | seconds per cycle (its training's wall time / cycles; trained "
+              f"{layout}) |",
               "|---|---|---|"]
     lines += [f"| {label(name)} | {cycles_to(by_run[name])} | {elapsed[name]:.2f} |" for name in run["approaches"]]
     lines += ["", *distractor_bullet(by_run, last),
