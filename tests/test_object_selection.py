@@ -100,7 +100,7 @@ def test_the_q_network_reads_the_robots_own_features_only_when_asked(read):
 def test_a_fixed_penalty_is_the_learned_ones_start_without_a_parameter():
     from flax import traverse_util
     env, tokens = lsd(8, (1, 3, 5), robot_cell=3)
-    net, params = network(env)
+    net, params = network(env, attention_fixed_penalty=False)
     flat = traverse_util.flatten_dict(params)
     at_start = {k: jnp.log(jnp.expm1(jnp.float32(16.0))) if k[-1] == "near" else v for k, v in flat.items()}
     fixed, _ = network(env, attention_fixed_penalty=True)

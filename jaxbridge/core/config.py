@@ -25,7 +25,7 @@ from jaxbridge.core.settings import Settings, described, setting
 # `keep_cycles` (older runs kept the latest two checkpoints alone); 14: `attention_robot_features` (older
 # learned selectors' Q-networks read the robot's own features), `attention_fixed_penalty`,
 # `attention_log_scale` (older ones had neither: their defaults); 15: `attention_kind_noise` (older learned
-# selectors' feature noise perturbed every token entry)
+# selectors' feature noise perturbed every token entry), `attention_fixed_penalty` on (older ones learned it)
 CONFIG_VERSION = 15
 NESTED_SINCE = 12
 
@@ -161,7 +161,7 @@ class TrainConfig(Settings):
         if version < 14 and "attention_robot_features" in _names(settings):
             learner = {"attention_robot_features": True, **learner}
         if version < 15 and "attention_kind_noise" in _names(settings):
-            learner = {"attention_kind_noise": True, **learner}
+            learner = {"attention_kind_noise": True, "attention_fixed_penalty": False, **learner}
         unknown = (set(data) - set(_OWN)) | {f"learner.{k}" for k in set(learner) - set(_names(settings))}
         if unknown:
             raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")

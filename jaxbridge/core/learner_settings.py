@@ -91,10 +91,11 @@ class QSettings(LearnerSettings):
     fingers) beside its token's type and displacement since the stall. Off (ours): it reads what the paper's
     rule gives, the chosen object and how far the robot has moved; attention's query reads the robot's
     whole token either way. Chosen on development seeds (docs/design/approaches.md)."""
-    attention_fixed_penalty: bool = False
-    """Learned selection only: attention's penalty per unit of distance stays at its start (16) instead of
-    being learned, so that a preference passes over a nearer object only within its bound's reach
-    (attention_preference / 16 squashed units). Tried on development seeds (docs/design/approaches.md)."""
+    attention_fixed_penalty: bool = True
+    """Learned selection only: attention's penalty per unit of distance stays at its start (16), so that a
+    preference passes over a nearer object only within its bound's reach (attention_preference / 16
+    squashed units). Off: the penalty is learned from there, and where it falls on the doors a preference
+    passes over the fix's door to the next. Chosen on development seeds (docs/design/approaches.md)."""
     attention_kind_noise: bool = False
     """Learned selection only: `feature_noise` also perturbs each token's type one-hot and interactable flag.
     Off (ours): it perturbs what measures an object, its features and offsets, and what an object is stays

@@ -38,14 +38,14 @@ class ObjectAttention(nn.Module):
     """Tokens [..., N, D] (slot 0 the robot; `position`: the entries of the offset its distance reads; the
     last entry: interactable) -> (attended [..., D], weights [..., N]): the attention-weighted mean of the
     interactable objects' tokens, a soft version of the paper's one selected object. The logits are a
-    preference for what the object is, bounded to +-`preference`, less a learned penalty per unit of
-    distance (starting at `near`): attention starts near the robot, as the paper's rule, and learns how
-    far to look and which kinds of object outweigh nearness."""
+    preference for what the object is, bounded to +-`preference`, less a penalty per unit of distance
+    (`near`, or learned from there): attention starts near the robot, as the paper's rule, and learns
+    which kinds of object outweigh nearness, within the bound's reach."""
 
     keys: int  # the width of a token's key and the robot's query
     position: slice
     preference: float  # the learner's attention_preference
-    fixed_penalty: bool = False  # the learner's attention_fixed_penalty: the penalty stays at `near`
+    fixed_penalty: bool = True  # the learner's attention_fixed_penalty: the penalty stays at `near`
     log_scale: bool = False  # the learner's attention_log_scale
     near: float = 16.0
 
@@ -120,7 +120,7 @@ class ObjectQNetwork(nn.Module):
     position: tuple[int, int]
     preference: float
     robot_features: tuple[int, int] | None = None  # the robot's own features, left out of the MLP's input
-    fixed_penalty: bool = False
+    fixed_penalty: bool = True
     log_scale: bool = False
     hidden_sizes: Sequence[int] = (32, 32)
     activation: str = "leaky_relu"
