@@ -115,20 +115,19 @@ def test_a_fixed_penalty_is_the_learned_ones_start_without_a_parameter():
 def test_a_learned_selectors_feature_noise_leaves_what_an_object_is_exact_unless_asked(kind_noise):
     """Feature noise on object tokens perturbs each token's features and offsets; its type's one-hot and its
     interactable flag stay exact (drawn only for the entries it perturbs), unless `attention_kind_noise`."""
-    from jaxbridge.learn.dqn import make_dqn, minibatch_noise, noise_shape, with_noise
+    from jaxbridge.learn import dqn
     config = TrainConfig.for_env("coffee", approach="ours_learned_selection", feature_noise=0.1,
                                  attention_kind_noise=kind_noise)
     env = env_class("coffee")()
-    learning = make_dqn(config, env, len(token_slots(env)) * token_width(env))
+    learning = dqn.make_dqn(config, env, len(token_slots(env)) * token_width(env))
     features = jnp.zeros((4, learning.stored_features))
-    shape = noise_shape(features.shape, learning.noise_entries)
-    perturbed = with_noise(features, minibatch_noise(jax.random.key(0), jnp.zeros(1, jnp.int32), shape)[0],
-                           learning.noise_entries)
+    perturbed = dqn.perturbed(features, 0.1, jax.random.key(0), jnp.int32(0), learning.noise_entries)
     tokens = np.asarray(perturbed).reshape(4, len(token_slots(env)), token_width(env))
     kinds = len(env.object_types)
     assert np.all(tokens[..., kinds:-1] != 0)  # features and both offsets
     assert np.all(tokens[..., :kinds] != 0) == np.all(tokens[..., -1] != 0) == kind_noise
-    assert shape[-1] == (tokens[0].size if kind_noise else tokens[0, :, kinds:-1].size)
+    drawn = dqn.noise_shape(features.shape, learning.noise_entries)[-1]
+    assert drawn == (tokens[0].size if kind_noise else tokens[0, :, kinds:-1].size)
 
 
 def test_log_scaled_attention_sharpens_with_the_number_of_candidates():

@@ -292,6 +292,13 @@ def with_noise(features: jax.Array, noise: jax.Array, entries: np.ndarray | None
     return features + jnp.take(padded, source, axis=-1)
 
 
+def perturbed(features: jax.Array, scale: float, key: jax.Array, update: jax.Array,
+              entries: np.ndarray | None) -> jax.Array:
+    """`features` plus `scale` times update `update`'s own `minibatch_noise`, drawn for `entries` alone."""
+    noise = minibatch_noise(key, update[None], noise_shape(features.shape, entries))[0]
+    return with_noise(features, scale * noise, entries)
+
+
 def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, index: jax.Array,
                 task: TaskPart | None = None, noise: jax.Array | None = None) -> tuple[DQNState, jax.Array]:
     """One Adam step on the minibatch of (transition, target) at buffer slots `index`, then a polyak
@@ -300,10 +307,9 @@ def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, i
     env, config, net = dqn.env, dqn.config, dqn.net
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
     features = batch.features
-    if config.feature_noise > 0:
-        if noise is None:
-            shape = noise_shape(features.shape, dqn.noise_entries)
-            noise = minibatch_noise(learner.key, learner.updates[None], shape)[0]
+    if config.feature_noise > 0 and noise is None:
+        features = perturbed(features, config.feature_noise, learner.key, learner.updates, dqn.noise_entries)
+    elif config.feature_noise > 0:
         features = with_noise(features, config.feature_noise * noise, dqn.noise_entries)
 
     def loss_fn(params):

@@ -45,8 +45,8 @@ class ObjectAttention(nn.Module):
     keys: int  # the width of a token's key and the robot's query
     position: slice
     preference: float  # the learner's attention_preference
-    fixed_penalty: bool = True  # the learner's attention_fixed_penalty: the penalty stays at `near`
-    log_scale: bool = False  # the learner's attention_log_scale
+    fixed_penalty: bool  # the learner's attention_fixed_penalty: the penalty stays at `near`
+    log_scale: bool  # the learner's attention_log_scale
     near: float = 16.0
 
     @nn.compact
@@ -119,9 +119,9 @@ class ObjectQNetwork(nn.Module):
     action_width: int
     position: tuple[int, int]
     preference: float
-    robot_features: tuple[int, int] | None = None  # the robot's own features, left out of the MLP's input
-    fixed_penalty: bool = True
-    log_scale: bool = False
+    robot_features: tuple[int, int] | None  # the robot's own features, left out of the MLP's input (None: none)
+    fixed_penalty: bool  # the learner's attention_* settings, declared there
+    log_scale: bool
     hidden_sizes: Sequence[int] = (32, 32)
     activation: str = "leaky_relu"
     output_init: str = "zero"

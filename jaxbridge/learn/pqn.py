@@ -21,7 +21,7 @@ from flax import struct
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import Normalise, PQNSettings, learner_settings
-from jaxbridge.learn.dqn import feature_noise_entries, minibatch_noise, noise_shape, q_network, with_noise
+from jaxbridge.learn.dqn import feature_noise_entries, perturbed, q_network
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import QNetwork, batch_input, best_candidate, candidate_skills, input_size
@@ -105,8 +105,7 @@ class PQN:
         env, net, noise = self.env, self.net, self.config.learner.feature_noise
         features = batch.features
         if noise > 0:  # as double DQN's (TrainConfig.feature_noise): a fresh draw per update
-            draw = minibatch_noise(state.key, state.updates[None], noise_shape(features.shape, self.noise_entries))[0]
-            features = with_noise(features, noise * draw, self.noise_entries)
+            features = perturbed(features, noise, state.key, state.updates, self.noise_entries)
 
         def loss_fn(params):
             q = net.apply(params, batch_input(env, features, batch.skill, batch.param), members=True)
