@@ -10,7 +10,8 @@ from bench.multi_novelty import ENV, NOT_LEARNED
 from bench.performance_blocks import busy_text
 from bench.records import RECORDS
 from bench.results_blocks import (approach_row, bar_text, by_approach, commit_text, cost_ratio, label, machine_text,
-                                  novelty_table, read_csv, read_json, seeds_label, step_command, table_header)
+                                  novelty_table, read_csv, read_json, seconds_text, seeds_label, step_command,
+                                  table_header)
 
 FOLDER = RECORDS / ENV
 BARS = {"test": 0.9, "held_out": 0.8}  # issue 54: the mean test solve rate at the last cycle, per protocol
@@ -104,7 +105,7 @@ def record_lines(run: dict, folder: Path, stem: str) -> list[str]:
     lines += ["", f"The bars, at cycle {last}:", "", *bars_lines(cells, last), "", answer(cells, kinds)]
     lines += ["", f"Cost per cycle against ours', one timing run in one process (`{run['steps']['cost']['command']}`):",
               *cost_lines(run)]
-    lines += ["", f"`{run['command']}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",
+    lines += ["", f"`{run['command']}`: {seconds_text(run)} on {machine_text(run['machine'])}, {commit_text(run)}.",
               "", f"![Multi Novelty, {seeds_label(run['seeds'])}]({folder.name}/{stem}.png)", "",
               novelty_table(ENV, read_csv(folder / f"{stem}_sweep.csv"), run["seeds"], step_command(run, "sweep"))]
     return lines

@@ -6,7 +6,7 @@ import json
 
 from bench.records import BENCH, QUICKSTART, RECORDS, SUITE, SUITE_CLAIMS, authors_seed_run_s
 from bench.results_blocks import (ENV_TITLES, ENVS, PRESET_RUN, commit_text, env_record, label, machine_text,
-                                  rerun_command, stat_row)
+                                  rerun_command, seconds_text, stat_row)
 from jaxbridge.utils import stats
 
 MISSING = "_Not measured yet: `{command}`._\n"
@@ -92,9 +92,9 @@ def paper_table() -> str:
             continue
         run, steps = record["run"], record["run"]["steps"]
         peak = max(steps[s]["peak_rss_mib"] for s in ("train", "train_authors_preset", "sweep"))
-        lines.append(f"| `{rerun_command(run)}` | {steps['train']['wall_s']:,.0f} s ({len(run['approaches'])} approaches) | "
-                     f"{steps['train_authors_preset']['wall_s']:,.0f} s | {steps['oracle']['wall_s']:,.0f} s | "
-                     f"{steps['sweep']['wall_s']:,.0f} s | {run['wall_s']:,.0f} s | {peak / 2**10:.2f} GiB |")
+        lines.append(f"| `{rerun_command(run)}` | {seconds_text(steps['train'])} ({len(run['approaches'])} approaches) | "
+                     f"{seconds_text(steps['train_authors_preset'])} | {steps['oracle']['wall_s']:,.0f} s | "
+                     f"{seconds_text(steps['sweep'])} | {seconds_text(run)} | {peak / 2**10:.2f} GiB |")
     return "\n".join(lines) + "\n"
 
 

@@ -34,6 +34,14 @@ def commit_text(record: dict) -> str:
     return f"commit {whole(record['commit'])}" + (f" (its steps: {steps})" if steps else "")
 
 
+def seconds_text(record: dict) -> str:
+    """A record's or step's wall time. A step restarted after a stop is timed from its restart (the stopped
+    attempt's seconds are not known), so its figure, and its record's, is a lower bound and says so."""
+    restarted = record.get("resumed") or any(isinstance(step, dict) and step.get("resumed")
+                                             for step in record.get("steps", {}).values())
+    return f"{'at least ' if restarted else ''}{record['wall_s']:,.0f} s{' (timed from a restart)' if restarted else ''}"
+
+
 def ledger_table() -> str:
     """RESULTS.md's view of the test-seed ledger: per seed set, env and study, how many rows (runs and
     record writes) it has and the latest row's change and the seeds it was chosen on."""
@@ -187,9 +195,9 @@ def ceiling_rows(record: dict) -> list[str]:
 def provenance(run: dict) -> str:
     """The command that made the record, its time, memory, machine and commit."""
     steps = run["steps"]
-    return (f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (training "
-            f"{steps['train']['wall_s']:,.0f} s, peak RSS {steps['train']['peak_rss_mib'] / 2**10:.1f} GiB; "
-            f"`--preset authors` {steps['train_authors_preset']['wall_s']:,.0f} s), {commit_text(run)}.")
+    return (f"`{rerun_command(run)}`: {seconds_text(run)} on {machine_text(run['machine'])} (training "
+            f"{seconds_text(steps['train'])}, peak RSS {steps['train']['peak_rss_mib'] / 2**10:.1f} GiB; "
+            f"`--preset authors` {seconds_text(steps['train_authors_preset'])}), {commit_text(run)}.")
 
 
 def ceiling(record: dict, protocol: str) -> str:
@@ -256,7 +264,7 @@ def plan_repair(env: str) -> str:
     lines = [f"Test seeds {run['seeds']}, {int(results[0]['seeds'])} seeds x {last} cycles; each cell: mean [95% CI] "
              "over seeds, IQM [95% CI] beside it.", "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
-    lines += ["", f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, "
+    lines += ["", f"`{rerun_command(run)}`: {seconds_text(run)} on {machine_text(run['machine'])}, "
               f"{commit_text(run)}.", "", f"![{ENV_TITLES[env]}, plan repair]({env}/plan_repair.png)", "",
               novelty_table(env, read_csv(folder / "plan_repair_sweep.csv"), run["seeds"], step_command(run, "sweep"))]
     return "\n".join(lines)
@@ -283,8 +291,9 @@ def learners(env: str) -> str:
               "| peak memory (MiB) |", "|---|---|---|---|"]
     for name, cycles in by_run.items():
         step = run["steps"][name]
-        lines.append(f"| {shown[name]} | {cycles_to(cycles)} | {step['wall_s'] / last:.2f} | {step['peak_rss_mib']:,.0f} |")
-    lines += ["", f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])} (the two trainings "
+        per_cycle = f"{step['wall_s'] / last:.2f}" + (" or more (timed from a restart)" if step.get("resumed") else "")
+        lines.append(f"| {shown[name]} | {cycles_to(cycles)} | {per_cycle} | {step['peak_rss_mib']:,.0f} |")
+    lines += ["", f"`{rerun_command(run)}`: {seconds_text(run)} on {machine_text(run['machine'])} (the two trainings "
               f"one after another), {commit_text(run)}.", "", f"![{ENV_TITLES[env]}, learners]({env}/learners.png)", ""]
     return "\n".join(lines)
 
@@ -364,7 +373,8 @@ def selection(env: str) -> str:
     lines = [f"Test seeds {run['seeds']}, {last} cycles; each cell: mean [95% CI] over seeds, IQM [95% CI] beside it.",
              "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
-    layout = "one at a time" if "--workers 1" in run["steps"]["train"]["command"] else "side by side"
+    layout = ("one at a time" if "--workers 1" in run["steps"]["train"]["command"] else "side by side") + (
+        "; timed from a restart, so lower bounds" if run["steps"]["train"].get("resumed") else "")
     lines += ["", f"| approach | cycles to a mean of 0.9 | seconds per cycle (its training's wall time / cycles; trained "
               f"{layout}) |",
               "|---|---|---|"]
@@ -380,7 +390,7 @@ def selection(env: str) -> str:
               f"its peak memory, both measured in one process: {run['steps']['cost']['peak_rss_mib']:,.0f} MiB.",
               f"* What it looks at (test tasks, greedy; `{step_command(run, 'attention')}`): "
               f"{attention_text(run['attention'])}{over_training_text(run, last)}.",
-              "", f"`{rerun_command(run)}`: {run['wall_s']:,.0f} s on {machine_text(run['machine'])}, {commit_text(run)}.",
+              "", f"`{rerun_command(run)}`: {seconds_text(run)} on {machine_text(run['machine'])}, {commit_text(run)}.",
               "", f"![{ENV_TITLES[env]}, selections]({env}/selection.png)", "",
               novelty_table(env, sweep_rows, run["seeds"], step_command(run, "sweep"))]
     return "\n".join(lines)

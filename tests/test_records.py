@@ -51,6 +51,17 @@ def test_a_finished_step_is_not_run_again_and_keeps_the_commit_it_ran_at(tmp_pat
     assert json.loads((tmp_path / "steps.json").read_text()) == {"train": first}
 
 
+def test_a_step_restarted_after_a_stop_shows_its_time_as_a_lower_bound():
+    # paper.train_step marks a training resumed from its checkpoints: its seconds count from the restart
+    seconds_text = render.results_blocks.seconds_text
+    whole = {"wall_s": 1234.0, "steps": {"train": {"wall_s": 1000.0}, "sweep": {"wall_s": 234.0}}}
+    assert seconds_text(whole) == "1,234 s" and seconds_text(whole["steps"]["train"]) == "1,000 s"
+    restarted = {**whole, "steps": {**whole["steps"], "train": {"wall_s": 600.0, "resumed": True}}}
+    assert seconds_text(restarted).startswith("at least 1,234 s")
+    assert seconds_text(restarted["steps"]["train"]).startswith("at least 600 s")
+    assert seconds_text(restarted["steps"]["sweep"]) == "234 s"
+
+
 def test_a_claims_verdict_follows_its_stated_rule():
     from bench import claims
     row = lambda mean, low, high: {"test_solve_rate_mean": mean, "test_solve_rate_mean_low": low, "test_solve_rate_mean_high": high}
