@@ -101,7 +101,8 @@ def parse_args(argv):
                         help="with a RUN of ours_learned_selection: per seed, how often the object its attention "
                              "weighs most at a bridge decision is the one the env's fix acts on (the oracle's); "
                              "then how often that object is the nearest candidate, the distance rank of what the "
-                             "misses looked at, and the seeds that look right but fail")
+                             "misses looked at, the seeds that look right but fail, and how often it is looked at by the "
+                             "action chosen")
     parser.add_argument("--cycle", type=positive_int, default=None, metavar="N",
                         help="with RUNs: evaluate the checkpoint saved after cycle N (a run keeps its latest two and "
                              "those of train.py --keep-cycles) (default: the latest)")

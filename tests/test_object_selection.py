@@ -1,5 +1,7 @@
 """The learned object selector (issue 37): its network reads any number of objects in any order, looks only
 at objects a skill can act on, and the approach trains, checkpoints and evaluates as every other."""
+import re
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -205,6 +207,11 @@ def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_l
     line, diagnosis = looked.stdout.splitlines()[-2:]
     assert line.startswith("attention on the fix's object, per seed: 0 ") and "; all " in line
     assert diagnosis.startswith("the fix's object is the nearest candidate at ") and "misses looked at the" in diagnosis
+    # the same decisions by the action chosen (a skill's name or CallPlanner): their counts add up to them all
+    by_action = re.findall(r"(\w+) [\d.]+ of (\d+)", diagnosis.partition("; by the action chosen: ")[2])
+    names = {skill.name for skill in env_class("light_switch_door").skills} | {"CallPlanner"}
+    assert by_action and {name for name, _ in by_action} <= names
+    assert sum(int(n) for _, n in by_action) == sum(int(n) for n in re.findall(r" of (\d+)", line))
     early = cli_in_process("eval.py", str(experiment), "--approach", "ours_learned_selection", "--attention",
                            "--cycle", "1")
     assert early.returncode == 0 and "cycle 1" in early.stdout and early.stdout.splitlines()[-2].startswith("attention on")

@@ -27,6 +27,7 @@ class Attention:
     nearest: np.ndarray  # float[seeds]: the fix's object the nearest candidate; NaN as agreement
     solve_rate: np.ndarray  # float[seeds]: of the seed's episodes
     missed_rank: np.ndarray  # int[RANKS]: misses looking at the nearest, 2nd, 3rd, farther candidate
+    by_action: dict[str, tuple[int, int]]  # the action chosen (a skill, or CallPlanner): (hits, decisions)
 
     @property
     def overall(self) -> float:
@@ -39,9 +40,10 @@ class Attention:
         near = self._over_decisions(self.nearest)
         ranks = ", ".join(f"{name} {n}" for name, n in zip(("nearest", "2nd", "3rd", "farther"), self.missed_rank))
         right_but_failing = [s for s, a, r in zip(self.seeds, self.agreement, self.solve_rate) if a >= 0.9 and r < 0.5]
+        actions = ", ".join(f"{name} {hits / n:.2f} of {n}" for name, (hits, n) in self.by_action.items() if n)
         return (f"the fix's object is the nearest candidate at {near:.2f} of them; the misses looked at the "
                 f"{ranks} (by distance); seeds attending to it at 0.9 or more but solving under 0.5: "
-                + (", ".join(map(str, right_but_failing)) or "none"))
+                + (", ".join(map(str, right_but_failing)) or "none") + f"; by the action chosen: {actions}")
 
     def _over_decisions(self, per_seed: np.ndarray) -> float:
         """A per-seed fraction of decisions as the fraction of every seed's decisions together."""
@@ -69,9 +71,13 @@ def attention_agreement(policy: TrainedPolicy, batch: TaskBatch, rollout_seed: i
     per_seed = lambda x: np.array([(counted & x)[:, batch.seeds == s].sum() for s in seeds])
     decisions = per_seed(counted)
     fraction = lambda x: np.where(decisions > 0, per_seed(x) / np.maximum(decisions, 1), np.nan)
+    # Which decisions read the fix's object matters where only some actions need it (a skill with no object)
+    chosen = np.asarray(records.skill)
+    by_action = {name: (int((counted & hit & (chosen == k)).sum()), int((counted & (chosen == k)).sum()))
+                 for k, name in enumerate([skill.name for skill in env.skills] + ["CallPlanner"])}
     return Attention(seeds, decisions, fraction(hit), fraction(nearest),
                      np.array([np.asarray(result.success)[batch.seeds == s].mean() for s in seeds]),
-                     np.bincount(np.minimum(at(rank, looked)[missed], RANKS - 1), minlength=RANKS))
+                     np.bincount(np.minimum(at(rank, looked)[missed], RANKS - 1), minlength=RANKS), by_action)
 
 
 def distance_rank(env, states) -> np.ndarray:
