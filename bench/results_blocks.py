@@ -34,12 +34,18 @@ def commit_text(record: dict) -> str:
     return f"commit {whole(record['commit'])}" + (f" (its steps: {steps})" if steps else "")
 
 
+def restarted(record: dict) -> bool:
+    """A step restarted after a stop (paper.train_step's "resumed"), or a record holding one: timed from its
+    restart, since the stopped attempt's seconds are not known."""
+    return bool(record.get("resumed")) or any(isinstance(step, dict) and step.get("resumed")
+                                              for step in record.get("steps", {}).values())
+
+
 def seconds_text(record: dict) -> str:
-    """A record's or step's wall time. A step restarted after a stop is timed from its restart (the stopped
-    attempt's seconds are not known), so its figure, and its record's, is a lower bound and says so."""
-    restarted = record.get("resumed") or any(isinstance(step, dict) and step.get("resumed")
-                                             for step in record.get("steps", {}).values())
-    return f"{'at least ' if restarted else ''}{record['wall_s']:,.0f} s{' (timed from a restart)' if restarted else ''}"
+    """A record's or step's wall time; a lower bound where it was `restarted`, and it says so."""
+    if restarted(record):
+        return f"at least {record['wall_s']:,.0f} s (timed from a restart)"
+    return f"{record['wall_s']:,.0f} s"
 
 
 def ledger_table() -> str:
@@ -291,7 +297,7 @@ def learners(env: str) -> str:
               "| peak memory (MiB) |", "|---|---|---|---|"]
     for name, cycles in by_run.items():
         step = run["steps"][name]
-        per_cycle = f"{step['wall_s'] / last:.2f}" + (" or more (timed from a restart)" if step.get("resumed") else "")
+        per_cycle = f"{step['wall_s'] / last:.2f}" + (" or more (timed from a restart)" if restarted(step) else "")
         lines.append(f"| {shown[name]} | {cycles_to(cycles)} | {per_cycle} | {step['peak_rss_mib']:,.0f} |")
     lines += ["", f"`{rerun_command(run)}`: {seconds_text(run)} on {machine_text(run['machine'])} (the two trainings "
               f"one after another), {commit_text(run)}.", "", f"![{ENV_TITLES[env]}, learners]({env}/learners.png)", ""]
@@ -374,7 +380,7 @@ def selection(env: str) -> str:
              "", *table_header(last)]
     lines += [approach_row(name, cycles, last) for name, cycles in by_run.items()]
     layout = ("one at a time" if "--workers 1" in run["steps"]["train"]["command"] else "side by side") + (
-        "; timed from a restart, so lower bounds" if run["steps"]["train"].get("resumed") else "")
+        "; timed from a restart, so lower bounds" if restarted(run["steps"]["train"]) else "")
     lines += ["", f"| approach | cycles to a mean of 0.9 | seconds per cycle (its training's wall time / cycles; trained "
               f"{layout}) |",
               "|---|---|---|"]

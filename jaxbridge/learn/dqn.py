@@ -307,10 +307,9 @@ def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, i
     env, config, net = dqn.env, dqn.config, dqn.net
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
     features = batch.features
-    if config.feature_noise > 0 and noise is None:
-        features = perturbed(features, config.feature_noise, learner.key, learner.updates, dqn.noise_entries)
-    elif config.feature_noise > 0:
-        features = with_noise(features, config.feature_noise * noise, dqn.noise_entries)
+    if config.feature_noise > 0:
+        features = (perturbed(features, config.feature_noise, learner.key, learner.updates, dqn.noise_entries)
+                    if noise is None else with_noise(features, config.feature_noise * noise, dqn.noise_entries))
 
     def loss_fn(params):
         variables = learner.replace(params=params).online

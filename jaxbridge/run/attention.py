@@ -73,8 +73,10 @@ def attention_agreement(policy: TrainedPolicy, batch: TaskBatch, rollout_seed: i
     fraction = lambda x: np.where(decisions > 0, per_seed(x) / np.maximum(decisions, 1), np.nan)
     # Which decisions read the fix's object matters where only some actions need it (a skill with no object)
     chosen = np.asarray(records.skill)
-    by_action = {name: (int((counted & hit & (chosen == k)).sum()), int((counted & (chosen == k)).sum()))
-                 for k, name in enumerate([skill.name for skill in env.skills] + ["CallPlanner"])}
+    by_action = {}
+    for k, name in enumerate(env.skill_names + ("CallPlanner",)):  # CallPlanner is skill num_skills
+        taken = counted & (chosen == k)
+        by_action[name] = (int((taken & hit).sum()), int(taken.sum()))
     return Attention(seeds, decisions, fraction(hit), fraction(nearest),
                      np.array([np.asarray(result.success)[batch.seeds == s].mean() for s in seeds]),
                      np.bincount(np.minimum(at(rank, looked)[missed], RANKS - 1), minlength=RANKS), by_action)
