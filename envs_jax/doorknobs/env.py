@@ -11,9 +11,8 @@ Worlds, task sampling and the host-side motion precompute live in `doorknobs_map
 """
 from __future__ import annotations
 
-import operator
 from dataclasses import dataclass
-from functools import partial, reduce
+from functools import partial
 from typing import ClassVar
 
 import jax
@@ -257,8 +256,7 @@ class Doorknobs(NoveltyEnv):
         (beyond the outer walls) counts as blocked."""
         here = _rooms_holding(task, centre)
         rects, mask = maps.room_obstacles(task, jnp.argmax(here), door_open)
-        hits = mask & geometry.circle_hits_rect(centre, ROBOT_RADIUS, rects)
-        return reduce(operator.or_, hits, ~jnp.any(here))  # by rows: see roadmap.visible
+        return ~jnp.any(here) | maps.robot_touches(centre, rects, mask)
 
     def step(self, state: State, action: jax.Array) -> State:
         """envs.md §3.4: a colliding move is cancelled; knobs of closed doors the robot touches (in the

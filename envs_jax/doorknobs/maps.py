@@ -9,6 +9,7 @@ x = col, y = size - 1 - row.
 from __future__ import annotations
 
 import functools
+import operator
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -112,8 +113,14 @@ def sample_room_map(rng: np.random.Generator, size: int) -> np.ndarray:
     return grid
 
 
+def robot_touches(centre: jax.Array, rects: jax.Array, mask: jax.Array) -> jax.Array:
+    """The robot circle at `centre` touches one of the masked-in rectangles (float32[N, 5], bool[N]); the
+    rows combined one by one: see roadmap.visible."""
+    return functools.reduce(operator.or_, mask & geometry.circle_hits_rect(centre, ROBOT_RADIUS, rects))
+
+
 _overlaps = jax.jit(geometry.rects_overlap)
-_hits = jax.jit(lambda centre, rects, mask: jnp.any(mask & geometry.circle_hits_rect(centre, ROBOT_RADIUS, rects)))
+_hits = jax.jit(robot_touches)
 
 
 def _robot_collides(grid, robot, row, col, clutter, doors) -> bool:
