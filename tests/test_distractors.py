@@ -86,7 +86,7 @@ def test_where_the_planner_gets_stuck_in_a_doorway_the_closest_object_is_its_kno
 def test_on_test_tasks_the_oracle_solves_and_the_rule_picks_a_closet_at_most_stuck_states():
     """Seeds 0-1's test tasks (5x5 maps): the closets change nothing the oracle reads, and at half the stuck
     states at least the rule picks the closet beside the real door the robot stands in, which the fix
-    turns (docs/design/approaches.md gives the fraction on seeds 0-7)."""
+    turns (docs/design/selection.md gives the fraction on seeds 0-7)."""
     solved, chosen, oracle, in_doorway = _stuck_picks(evaluation_batch(DoorknobsDistractor, [0, 1], 10))
     rooms = DoorknobsDistractor().map_size ** 2
     assert solved.mean() >= 0.95 and len(chosen) >= 20 and in_doorway.all()

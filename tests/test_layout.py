@@ -56,6 +56,17 @@ def test_no_module_outgrows_its_cap():
     assert not long, f"split these (caps: {MAX_MODULE_LINES} lines a module, {MAX_SCRIPT_LINES} a script): {long}"
 
 
+# The pages a reader opens first stay short enough to read whole: the results' headlines, claims and seeds
+# (each study on its own page), and each design page one subject.
+MAX_PAGE_LINES = {"docs/RESULTS.md": 250, "docs/DESIGN.md": 400, "docs/design/*.md": 400}
+
+
+def test_no_results_or_design_page_outgrows_its_cap():
+    long = {str(path.relative_to(ROOT)): n for pattern, cap in MAX_PAGE_LINES.items() for path in sorted(ROOT.glob(pattern))
+            if (n := len(path.read_text().splitlines())) > cap}
+    assert len(list(ROOT.glob("docs/design/*.md"))) >= 2 and not long, long
+
+
 def test_the_command_lines_call_only_the_public_api():
     """train.py and eval.py are flags, calls of `jaxbridge`'s public names, and printing: they import the
     package root and the command-line plumbing (utils), nothing else of the package, and every name they

@@ -85,25 +85,25 @@ class QSettings(LearnerSettings):
     """Learned selection only: how far, in logits, what an object is may move attention against its
     distance (a tanh bound). Learned on a training task's few objects, a wider bound lets a preference
     override nearness among a test task's many; a narrower one cannot pass over a nearer decoy
-    (docs/design/approaches.md)."""
+    (docs/design/selection.md)."""
     attention_robot_features: bool = False
     """Learned selection only: the Q-network reads the robot's own features (Coffee's z, tilt, wrist and
     fingers) beside its token's type and displacement since the stall. Off (ours): it reads what the paper's
     rule gives, the chosen object and how far the robot has moved; attention's query reads the robot's
-    whole token either way. Chosen on development seeds (docs/design/approaches.md)."""
+    whole token either way. Chosen on development seeds (docs/design/selection.md)."""
     attention_fixed_penalty: bool = True
     """Learned selection only: attention's penalty per unit of distance stays at its start (16), so that a
     preference passes over a nearer object only within its bound's reach (attention_preference / 16
     squashed units). Off: the penalty is learned from there, and where it falls on the doors a preference
-    passes over the fix's door to the next. Chosen on development seeds (docs/design/approaches.md)."""
+    passes over the fix's door to the next. Chosen on development seeds (docs/design/selection.md)."""
     attention_kind_noise: bool = False
     """Learned selection only: `feature_noise` also perturbs each token's type one-hot and interactable flag.
     Off (ours): it perturbs what measures an object, its features and offsets, and what an object is stays
-    exact (ours' features have no such entries). Chosen on development seeds (docs/design/approaches.md)."""
+    exact (ours' features have no such entries). Chosen on development seeds (docs/design/selection.md)."""
     attention_log_scale: bool = False
     """Learned selection only: attention's logits times the log of the number of candidates (a scalable
     softmax), so that a test task's many objects do not spread what a training task's few sharpened. Tried
-    on development seeds (docs/design/approaches.md)."""
+    on development seeds (docs/design/selection.md)."""
     q_ensemble: int = setting(1, low=1)
     """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     reset_optimizer: bool = False
