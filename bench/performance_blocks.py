@@ -95,6 +95,10 @@ def paper_table() -> str:
         lines.append(f"| `{rerun_command(run)}` | {seconds_text(steps['train'])} ({len(run['approaches'])} approaches) | "
                      f"{seconds_text(steps['train_authors_preset'])} | {steps['oracle']['wall_s']:,.0f} s | "
                      f"{seconds_text(steps['sweep'])} | {seconds_text(run)} | {peak / 2**10:.2f} GiB |")
+    # The headlines run hours, so their machine is often not the quick start's: say which it was.
+    where = sorted({f"{machine_text(r['run']['machine'])}, {commit_text(r['run'])}" for env in ENVS if (r := env_record(env))})
+    if where:
+        lines += ["", "Measured on " + "; ".join(where) + "."]
     return "\n".join(lines) + "\n"
 
 
