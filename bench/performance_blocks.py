@@ -85,20 +85,20 @@ def paper_table() -> str:
     """Each env's test-seed headline (bench.paper): the time and memory of each of its steps."""
     lines = ["| command | training (approaches x 32 seeds) | `--preset authors` | oracle | sweep | total | peak RSS |",
              "|---|---|---|---|---|---|---|"]
+    where = set()  # the headlines run hours, so their machine is often not the quick start's: say which it was
     for env in ENVS:
         record = env_record(env)
         if record is None:
             lines.append(f"| `python -m bench.paper --env {env}` | not run yet | | | | | |")
             continue
         run, steps = record["run"], record["run"]["steps"]
+        where.add(f"{machine_text(run['machine'])}, {commit_text(run)}")
         peak = max(steps[s]["peak_rss_mib"] for s in ("train", "train_authors_preset", "sweep"))
         lines.append(f"| `{rerun_command(run)}` | {seconds_text(steps['train'])} ({len(run['approaches'])} approaches) | "
                      f"{seconds_text(steps['train_authors_preset'])} | {steps['oracle']['wall_s']:,.0f} s | "
                      f"{seconds_text(steps['sweep'])} | {seconds_text(run)} | {peak / 2**10:.2f} GiB |")
-    # The headlines run hours, so their machine is often not the quick start's: say which it was.
-    where = sorted({f"{machine_text(r['run']['machine'])}, {commit_text(r['run'])}" for env in ENVS if (r := env_record(env))})
     if where:
-        lines += ["", "Measured on " + "; ".join(where) + "."]
+        lines += ["", "Measured on " + "; ".join(sorted(where)) + "."]
     return "\n".join(lines) + "\n"
 
 
