@@ -361,7 +361,7 @@ def attention_text(line: str) -> str:
 
 def selection(env: str) -> str:
     """docs/results/selection.md's table of the selections on `env`'s test seeds (bench.selection's records): test solve
-    rates, what the learned selector looks at, its cost, and each bar of issue 37 measured."""
+    rates, what the learned selector looks at and its cost; no bar is judged (the seeds are spent for the selector)."""
     folder = RECORDS / env
     run = read_json(folder / "selection.json")
     if run is None:
@@ -387,12 +387,12 @@ def selection(env: str) -> str:
     lines += [f"| {label(name)} | {cycles_to(by_run[name])} | {elapsed[name]:.2f} |" for name in run["approaches"]]
     lines += ["", *distractor_bullet(by_run, last),
               f"* Smooth test reward at cycle {last}, learned selection over ours: "
-              f"{bar_text(ratio, reward_ci, 0.9, 'issue 55')}; the paper's rule "
+              f"{stats.ci_text(ratio, reward_ci) if reward_ci else f'{ratio:.2f}'}; the paper's rule "
               f"read off the object view over ours: {reward['ours_closest_object'] / reward['ours']:.2f}.",
               f"* Generalisation sweep, learned selection's mean solve rate over ours' at each count: lowest "
-              f"{bar_text(lowest[0], lowest[1:], 0.9, 'issue 55, at every count')}.",
+              f"{stats.ci_text(lowest[0], lowest[1:])}.",
               f"* Cost (`{run['steps']['cost']['command']}`: one timing run, no interval), a cycle of the learned "
-              f"selection over one of ours: {bar_text(cost_ratio(run['cost']), None, 3, 'issue 55', at_least=False)}; "
+              f"selection over one of ours: {cost_ratio(run['cost']):.2f}; "
               f"its peak memory, both measured in one process: {run['steps']['cost']['peak_rss_mib']:,.0f} MiB.",
               f"* What it looks at (test tasks, greedy; `{step_command(run, 'attention')}`): "
               f"{attention_text(run['attention'])}{over_training_text(run, last)}.",
