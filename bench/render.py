@@ -17,14 +17,15 @@ import argparse
 import re
 import sys
 
-from bench import claims, fix_length_page, multi_novelty_page, performance_blocks, results_blocks
+from bench import claims, fix_length_page, multi_novelty_page, performance_blocks, results_blocks, selection_history
 from bench.records import ROOT
 
 DOCS = ("README.md", "docs/RESULTS.md", "docs/PERFORMANCE.md", "docs/results/generalisation.md", "docs/results/plan_repair.md",
         "docs/results/learners.md", "docs/results/selection.md", "docs/results/fix_length.md",
         "docs/results/multi_novelty.md", "docs/results/ledger.md")
-BLOCKS = {**results_blocks.BLOCKS, **performance_blocks.BLOCKS, "claims": claims.claims_table,
-          "fix length": fix_length_page.block, "multi novelty": multi_novelty_page.block}
+BLOCKS = {**results_blocks.BLOCKS, **performance_blocks.BLOCKS, "claims": claims.claims_table, "claims rule": claims.rule_text,
+          "fix length": fix_length_page.block, "multi novelty": multi_novelty_page.block,
+          "selection history": selection_history.block}
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[\w ]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
 
 
