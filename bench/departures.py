@@ -1,4 +1,4 @@
-"""The departure table of docs/results/departures.md: the effect of each departure from the authors' code
+"""The departure table: the effect of each departure from the authors' code
 that a config switches (docs/design/approaches.md, "Departures"), measured on validation seeds from 100.
 
     python -m bench.departures --env light_switch_door [--num-seeds 16] [--out runs/departures]

@@ -1,7 +1,7 @@
 """The low-level baselines against ours and Maple Q (issue 22): test solve rate against training steps on a
-log axis, one panel per env, and the table docs/results/low_level.md quotes, from finished experiment directories.
+log axis, one panel per env, and its table, from finished experiment directories.
 
-    python -m bench.low_level runs/ll/lsd_16 runs/ll/lsd_sac_4 ... --figure docs/figures/low_level.png
+    python -m bench.low_level runs/ll/lsd_16 runs/ll/lsd_sac_4 ... --figure runs/ll/low_level.png
 
 Every run of the given experiments is one line: its approach, with its budget where it is not the
 paper's. x: training steps per seed so far (the mean over seeds of the summed `train_env_steps`: env
