@@ -8,7 +8,12 @@ The bench commands that train on test seeds (bench.paper, bench.plan_repair, ben
 bench.selection) append their row themselves; this command is for a test-seed run made any other way.
 A row: the date, the seed set, the env, what ran, the code's commit (with "+changes" when the tree was
 dirty), what changed since that set's previous run of the same study and on which seeds the change was
-chosen. `python -m bench.render` shows the ledger in docs/RESULTS.md.
+chosen. `python -m bench.render` shows the ledger in docs/results/ledger.md.
+
+    python -m bench.ledger --spent "the learned selector" --first-seed 300 --change "its Coffee result ..."
+
+writes a row that records no run: the set is spent for that subject (a result seen there motivated a
+change to it), its fields say so.
 """
 from __future__ import annotations
 
@@ -22,6 +27,19 @@ from bench.records import RECORDS, TEST_SETS, check_clean, git_commit, refuse
 
 LEDGER = RECORDS / "ledger.csv"
 FIELDS = ("date", "seeds", "env", "ran", "commit", "change", "chosen_on")
+# The first rows were not written when their runs started: 8e898ed, which began the ledger, reconstructed them
+# from the committed records' history (each record's commit, steps and commands).
+RECONSTRUCTED = {"rows": 62, "at": "8e898ed"}
+SPENT = "no run: the set is spent for {subject}"  # a spent row's `ran`; its env, change and chosen_on say why
+
+
+def is_spent(row: dict) -> bool:
+    return row["ran"].startswith(SPENT.partition("{")[0])
+
+
+def spent_row(seeds: str, subject: str, why: str, commit: str | None = None) -> dict:
+    """Append a row that records no run: `seeds` are spent for `subject` because of `why`."""
+    return append(seeds, "all", SPENT.format(subject=subject), f"spent: {why}", "no run: nothing was chosen", commit)
 
 
 def rows() -> list[dict]:
@@ -108,21 +126,29 @@ def add_reason_flags(parser: argparse.ArgumentParser, required: bool = True) -> 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.ledger", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", required=True, help="the env the run trained or evaluated on")
-    parser.add_argument("--ran", required=True, help="the command that ran, as typed")
+    parser.add_argument("--env", help="the env the run trained or evaluated on (required unless --spent)")
+    parser.add_argument("--ran", help="the command that ran, as typed (required unless --spent)")
+    parser.add_argument("--spent", metavar="SUBJECT",
+                        help="record no run: the seed set is spent for SUBJECT (e.g. \"the learned selector\"); "
+                             "--change says which result motivated which change")
     parser.add_argument("--first-seed", type=int, default=min(TEST_SETS),
                         help=f"its first seed (default: %(default)s; the sets: {', '.join(map(str, TEST_SETS))})")
     parser.add_argument("--num-seeds", type=int, default=TEST_SETS[min(TEST_SETS)],
                         help="how many seeds it ran (default: %(default)s)")
     parser.add_argument("--commit", help="the code's commit it ran at (default: this checkout's, +changes if dirty)")
-    add_reason_flags(parser)
+    add_reason_flags(parser, required=False)
     args = parser.parse_args(argv)
     try:
         seeds = seed_set(args.first_seed, args.num_seeds)
     except ValueError as err:
         print(f"bench.ledger: {err}", file=sys.stderr)
         return 2
-    row = append(seeds, args.env, args.ran, args.change, args.chosen_on, args.commit)
+    needed = ("change",) if args.spent else ("env", "ran", "change", "chosen_on")
+    if missing := [f"--{name.replace('_', '-')}" for name in needed if not getattr(args, name)]:
+        print(f"bench.ledger: {' and '.join(missing)} needed {'with --spent' if args.spent else 'for a run'}", file=sys.stderr)
+        return 2
+    row = (spent_row(seeds, args.spent, args.change, args.commit) if args.spent else
+           append(seeds, args.env, args.ran, args.change, args.chosen_on, args.commit))
     print(f"ledger: {row['date']} {row['seeds']} {row['env']} at {row['commit']} -> {LEDGER}")
     return 0
 

@@ -55,8 +55,13 @@ def ledger_table() -> str:
     groups: dict[tuple, list[dict]] = {}
     for row in ledger.rows():
         study = re.search(r"bench\.\w+", row["ran"])
-        groups.setdefault((row["seeds"], row["env"], study[0] if study else "by hand"), []).append(row)
-    lines = ["| seeds | env | study | rows | first, last date | the latest change | chosen on |", "|---|---|---|---|---|---|---|"]
+        name = row["ran"] if ledger.is_spent(row) else study[0] if study else "by hand"
+        groups.setdefault((row["seeds"], row["env"], name), []).append(row)
+    first = ledger.RECONSTRUCTED
+    lines = [f"Its first {first['rows']} rows were not written as their runs started: {first['at']}, which began the "
+             "ledger, reconstructed them from the committed records' history (each record's commit, steps and "
+             "commands); every later row was appended by its command as the run started.", "",
+             "| seeds | env | study | rows | first, last date | the latest change | chosen on |", "|---|---|---|---|---|---|---|"]
     for (seeds, env, study), rows in groups.items():
         latest = next(r for r in reversed(rows) if r["change"] != "-") if any(r["change"] != "-" for r in rows) else rows[-1]
         lines.append(f"| {seeds} | {env} | {study} | {len(rows)} | {rows[0]['date']}, {rows[-1]['date']} | "

@@ -113,6 +113,22 @@ def test_the_ledger_command_appends_a_row_and_refuses_seeds_outside_the_sets(own
     assert "not within a test-seed set" in capsys.readouterr().err and len(ledger.rows()) == 1
 
 
+def test_a_spent_row_records_no_run_and_says_why(own_ledger, capsys):
+    assert ledger.main(["--spent", "the learned selector", "--first-seed", "300", "--change", "a result seen there",
+                        "--commit", "abc"]) == 0
+    (row,) = ledger.rows()
+    assert ledger.is_spent(row) and row["ran"] == "no run: the set is spent for the learned selector"
+    assert (row["seeds"], row["change"], row["chosen_on"]) == ("300-331", "spent: a result seen there", "no run: nothing was chosen")
+    assert ledger.main(["--spent", "the learned selector", "--first-seed", "300"]) == 2  # without its reason
+    assert ledger.main(["--env", "coffee", "--first-seed", "300", "--change", "x", "--chosen-on", "y"]) == 2  # a run without --ran
+    assert capsys.readouterr().err.count("\n") == 2 and len(ledger.rows()) == 1
+
+
+def test_the_selectors_spent_sets_are_in_the_ledger():
+    spent = {row["seeds"] for row in ledger.rows() if ledger.is_spent(row) and "learned selector" in row["ran"]}
+    assert "300-331" in spent
+
+
 def test_a_command_on_development_or_test_seeds_writes_a_row_only_for_a_test_set(own_ledger, monkeypatch, capsys):
     """bench.multi_novelty and bench.fix_length (`ledger.begin_on_seeds`): development seeds leave the ledger
     alone; test seeds need their reasons, and a range leaving its set is refused."""
