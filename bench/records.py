@@ -28,6 +28,9 @@ TEST_SEEDS = (200, 32)
 # 400-431 this round's new studies (and the learned selector's next verdict: 200-231 and 300-331 are spent
 # for it, the ledger's rows say why). Each run on them gets a ledger row (bench.ledger).
 TEST_SETS = {200: 32, 300: 32, 400: 32}
+# {approach: the test-seed sets spent for it}: a result seen there motivated a change to it, so its records
+# there are history, judged against no bar (each has a spent row in the ledger: bench.ledger --spent).
+SPENT = {"ours_learned_selection": ("200-231", "300-331")}
 
 
 def authors_seed_run_s() -> dict[str, float]:
