@@ -57,6 +57,10 @@ def discounted_returns(transitions: Transition, valid: jax.Array, gamma: jax.Arr
     return jax.lax.scan(backwards, jnp.float32(0.0), (transitions.reward, transitions.done, valid), reverse=True)[1]
 
 
+# Adam without its step size: `learn` steps by hyper.learning_rate, a leaf (a sweep gives each setting its own).
+ADAM = optax.scale_by_adam()
+
+
 @dataclass(frozen=True)
 class MonteCarloQ:
     env: NoveltyEnv
@@ -71,7 +75,7 @@ class MonteCarloQ:
         width = input_size(self.env, self.num_features)
         params = self.net.init(k_init, jnp.zeros((1, width), jnp.float32))
         rows = self.settings.memory * self.rows
-        return MonteCarloState(params=params, opt_state=optax.adam(self.settings.learning_rate).init(params), key=k_run,
+        return MonteCarloState(params=params, opt_state=ADAM.init(params), key=k_run,
                                decisions=jnp.int32(0), cycles=jnp.int32(0), inputs=jnp.zeros((rows, width), jnp.float32),
                                returns=jnp.zeros(rows, jnp.float32), valid=jnp.zeros(rows, bool))
 
@@ -88,7 +92,7 @@ class MonteCarloQ:
                              valid=put(state.valid, valid), cycles=state.cycles + 1)
 
     def learn(self, hyper, state: MonteCarloState, decisions: jax.Array, tasks: Any):
-        optimizer, weight = optax.adam(self.settings.learning_rate), state.valid.astype(jnp.float32)
+        weight = state.valid.astype(jnp.float32)
 
         def loss_fn(params):
             q = self.net.apply(params, state.inputs)
@@ -97,8 +101,9 @@ class MonteCarloQ:
         def step(carry, _):
             params, opt_state = carry
             (loss, q_abs), grads = jax.value_and_grad(loss_fn, has_aux=True)(params)
-            updates, opt_state = optimizer.update(grads, opt_state)
-            return (optax.apply_updates(params, updates), opt_state), (loss, q_abs)
+            moments, opt_state = ADAM.update(grads, opt_state)
+            params = jax.tree.map(lambda p, m: p - hyper.learning_rate * m, params, moments)
+            return (params, opt_state), (loss, q_abs)
 
         (params, opt_state), (losses, q_abs) = jax.lax.scan(step, (state.params, state.opt_state), None,
                                                            length=self.settings.epochs)

@@ -6,6 +6,7 @@ import jax.numpy as jnp
 
 from examples.monte_carlo_q import MonteCarloQ, MonteCarloSettings, make_learner
 from jaxbridge.core.learner_settings import learner_settings
+from jaxbridge.learn.hyper import Hyper
 
 
 @dataclass(frozen=True)
@@ -26,6 +27,16 @@ class VectorLoss(MonteCarloQ):
         return state, jnp.full(3, loss), q_abs
 
 
+@dataclass(frozen=True)
+class StaticLearningRate(MonteCarloQ):
+    """learn steps by its settings' learning_rate, not hyper's: a sweep over it would train every setting
+    at one value."""
+
+    def learn(self, hyper, state, decisions, tasks):
+        static = Hyper(**{**hyper.values, "learning_rate": self.settings.learning_rate})
+        return super().learn(static, state, decisions, tasks)
+
+
 @learner_settings(MonteCarloSettings)
 def growing_state(*args):
     return GrowingState(*vars(make_learner(*args)).values())
@@ -34,3 +45,8 @@ def growing_state(*args):
 @learner_settings(MonteCarloSettings)
 def vector_loss(*args):
     return VectorLoss(*vars(make_learner(*args)).values())
+
+
+@learner_settings(MonteCarloSettings)
+def static_learning_rate(*args):
+    return StaticLearningRate(*vars(make_learner(*args)).values())

@@ -1,6 +1,7 @@
 """The learner contract (jaxbridge/learn/learner.py): both built-in learners pass `check_learner`, broken ones are
-refused naming the method, PQN's Q(lambda) targets are the formula's, PQN resumes exactly and evaluates, and the
-example learner of docs/NEW_LEARNER.md trains from the command line."""
+refused naming the method, PQN's Q(lambda) targets are the formula's, PQN resumes exactly and evaluates, the
+example learner of docs/NEW_LEARNER.md trains from the command line, and a sweep over a leaf setting trains each value
+(a learner reads it from `hyper`, never from its settings)."""
 import csv
 import json
 from dataclasses import replace
@@ -11,12 +12,16 @@ import numpy as np
 import pytest
 from run_helpers import cli_in_process, one_line_error, train as train_cli, trained_whole_and_resumed
 
+import jaxbridge
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.learner import LearnerContractError, check_learner
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.learn.transitions import Transition
 from jaxbridge.run.evaluate import evaluate_run
+
+
+EXAMPLE = "examples.monte_carlo_q:make_learner"
 
 
 def one_seed_tasks(setup):
@@ -89,7 +94,7 @@ def test_a_pqn_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test
 def test_the_example_learner_trains_from_the_command_line_sweeps_its_own_settings_and_its_checkpoint_evaluates(tmp_path):
     # One run: its own settings set (memory: 3 cycles, all of a 3-cycle run) and swept (epochs: its
     # default 50, and 7), each setting its own run directory.
-    learner = "examples.monte_carlo_q:make_learner"
+    learner = EXAMPLE
     proc = train_cli("--env", "examples.locked_box:LockedBox", "--approaches", "ours", "--learner", learner,
                      "--num-seeds", "2", "--cycles", "3", "--set", "memory=3", "--sweep", "epochs=50,7",
                      "--no-progress", "--out", str(tmp_path))
@@ -106,3 +111,28 @@ def test_the_example_learner_trains_from_the_command_line_sweeps_its_own_setting
     refused = cli_in_process("train.py", "--env", "examples.locked_box:LockedBox", "--learner", learner, "--set", "memory=0",
                              "--out", str(tmp_path / "refused"))
     assert refused.returncode == 2 and "memory must be at least 1" in refused.stderr
+
+
+def test_a_sweep_over_the_example_learners_learning_rate_trains_each_value():
+    # One program for both settings (a leaf), each slot stepping at its own rate: the same first cycle's
+    # decisions, barely fitted at 1e-6 and far at 3e-2 (a learning rate read as a constant trained both alike).
+    experiment = jaxbridge.train("light_switch_door", "ours", seeds=1, cycles=2, learner=EXAMPLE,
+                                 sweep={"learning_rate": (1e-6, 3e-2)})
+    slow, fast = (experiment.metrics[f"ours@learning_rate={rate}"] for rate in ("1e-06", "0.03"))
+    assert slow["train_decisions"][0, 0] == fast["train_decisions"][0, 0] > 0  # the same decisions to fit
+    assert fast["q_abs_max"][0, 0] > 100 * slow["q_abs_max"][0, 0]
+    assert fast["loss"][0, 0] < 0.9 * slow["loss"][0, 0]
+
+
+def test_a_learner_that_reads_a_leaf_setting_from_its_settings_is_refused(tmp_path):
+    # Its settings hold the leaf's name, not a number: it cannot train every setting of a sweep at one value.
+    spec = "tests.plugin_learners:static_learning_rate"
+    config = TrainConfig(learner=spec)
+    message = ("StaticLearningRate.learn: raised LeafReadError: learning_rate is a leaf setting: a learner reads it as "
+               "hyper.learning_rate")
+    with pytest.raises(LearnerContractError, match=message):
+        check_learner(make_setup(config).learner, config)
+    proc = cli_in_process("train.py", "--learner", spec, "--approaches", "ours", "--num-seeds", "1",
+                          "--sweep", "learning_rate=1e-6,3e-2", "--out", str(tmp_path))
+    one_line_error(proc, 2, f"--learner: {message}")
+    assert not any(tmp_path.iterdir())

@@ -32,7 +32,8 @@ class QLearner(Protocol):
     """What a seed's cycle needs of a learner. `state` is the learner's pytree (a flax struct dataclass):
     it must have `key` (a PRNG key the cycle splits and replaces) and `decisions` (int32, the training
     bridge decisions so far, which the cycle adds to and the exploration schedule reads). `hyper` is the
-    cycle's numeric hyperparameters as leaves (learn/hyper.py)."""
+    cycle's numeric hyperparameters as leaves (learn/hyper.py), the one place a learner reads them: its
+    settings hold their names alone (learners.factory_config)."""
 
     env: NoveltyEnv  # the training env: its capacity fixes the shapes
     net: QNetwork  # the Q-function the bridge calls: net.apply(greedy(state), input) -> Q

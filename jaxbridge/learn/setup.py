@@ -21,7 +21,7 @@ from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, 
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.exploration import with_exploration
 from jaxbridge.learn.learner import QLearner
-from jaxbridge.learn.learners import learner_factory
+from jaxbridge.learn.learners import factory_config, learner_factory
 from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.utils.progress import SlowWork
 
@@ -95,7 +95,7 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
     make_learner = learner_factory(config.learner.name)
-    learner = with_exploration(make_learner(config, train_env, approach.observation_size(train_env),
+    learner = with_exploration(make_learner(factory_config(config), train_env, approach.observation_size(train_env),
                                             approach.controls.observation.whole_state), config)
     return Setup(config, env_cls, approach, train_env, test_env, learner)
 
