@@ -4,11 +4,11 @@ the run starts (dirty tree or not), so that a reader can see every time a set wa
     python -m bench.ledger --env coffee --ran "train.py --env coffee --first-seed 200 ..." \\
         --change "the step discount (step_gamma 0.99)" --chosen-on "development seeds 0-31"
 
-The bench commands that train on test seeds (bench.paper, bench.plan_repair, bench.learners,
-bench.selection) append their row themselves; this command is for a test-seed run made any other way.
+The studies (bench/study.py) append their row themselves when they start on test seeds; this command is
+for a test-seed run made any other way.
 A row: the date, the seed set, the env, what ran, the code's commit (with "+changes" when the tree was
 dirty), what changed since that set's previous run of the same study and on which seeds the change was
-chosen. `python -m bench.render` shows the ledger in docs/results/ledger.md.
+chosen. `python -m bench.pages.render` shows the ledger in docs/results/ledger.md.
 
     python -m bench.ledger --spent "the learned selector" --first-seed 300 --change "its Coffee result ..."
 
@@ -21,9 +21,8 @@ import argparse
 import csv
 import datetime
 import sys
-from pathlib import Path
 
-from bench.records import RECORDS, TEST_SETS, check_clean, git_commit, refuse
+from bench.records import RECORDS, TEST_SETS, git_commit
 
 LEDGER = RECORDS / "ledger.csv"
 FIELDS = ("date", "seeds", "env", "ran", "commit", "change", "chosen_on")
@@ -83,46 +82,6 @@ def seed_list(text: str) -> list[int]:
     return list(range(int(first), int(last or first) + 1))
 
 
-def add_seed_run_flags(parser: argparse.ArgumentParser) -> None:
-    """The flags of a bench command that runs on development or test seeds (`begin_on_seeds`)."""
-    parser.add_argument("--records", type=Path, default=RECORDS, help="where the records go (default: docs/results)")
-    parser.add_argument("--allow-dirty", action="store_true",
-                        help="run on code with uncommitted changes (a local try): the records go to RUNS/records")
-    add_reason_flags(parser, required=False)
-
-
-def begin_on_seeds(module: str, env: str, seeds: list[int], command: str, args: argparse.Namespace) -> bool:
-    """Before a bench command that runs on development or test seeds does any work: refuse dirty code
-    without args.allow_dirty (exit 2), else point args.records at RUNS/records for it; on a test-seed set,
-    refuse a run without args.change and args.chosen_on and append its ledger row. Returns whether the code
-    has uncommitted changes."""
-    changed = check_clean(module, args.allow_dirty)
-    if changed:
-        args.records = args.runs.resolve() / "records"
-        print(f"{module}: uncommitted code: the records go to {args.records}", flush=True)
-    if on_test_seeds(seeds):
-        try:
-            name = seed_set(seeds[0], len(seeds))
-        except ValueError as err:
-            refuse(f"{module}: {err}")
-        if not (args.change and args.chosen_on):
-            refuse(f"{module}: a run on test seeds needs --change and --chosen-on (its ledger row)")
-        append(name, env, command, args.change, args.chosen_on, git_commit(changed))
-    return bool(changed)
-
-
-def add_reason_flags(parser: argparse.ArgumentParser, required: bool = True) -> None:
-    """The two flags a test-seed run states its reason with (the ledger's `change` and `chosen_on`); not
-    `required` where the command also runs on development seeds, which need no ledger row."""
-    where = "" if required else "on test seeds: "
-    parser.add_argument("--change", required=required,
-                        help=f"{where}what changed since this seed set's previous run of the same study and why, in a "
-                             "line (\"first run\" for the first); goes into docs/results/ledger.csv")
-    parser.add_argument("--chosen-on", required=required,
-                        help=f"{where}the seeds the change was chosen on, e.g. \"development seeds 0-31\" (\"-\" for "
-                             "a first run); goes into docs/results/ledger.csv")
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.ledger", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -136,7 +95,10 @@ def main(argv=None) -> int:
     parser.add_argument("--num-seeds", type=int, default=TEST_SETS[min(TEST_SETS)],
                         help="how many seeds it ran (default: %(default)s)")
     parser.add_argument("--commit", help="the code's commit it ran at (default: this checkout's, +changes if dirty)")
-    add_reason_flags(parser, required=False)
+    parser.add_argument("--change", help="what changed since this seed set's previous run of the same study and why, in a "
+                                         "line (\"first run\" for the first); with --spent: which result spent the set")
+    parser.add_argument("--chosen-on", help="the seeds the change was chosen on, e.g. \"development seeds 0-31\" (\"-\" for "
+                                            "a first run)")
     args = parser.parse_args(argv)
     try:
         seeds = seed_set(args.first_seed, args.num_seeds)

@@ -1,11 +1,12 @@
 """Where the committed records live and what every headline is computed on: shared by the commands that
-write records (bench.paper, bench) and the one that renders docs from them (bench.render)."""
+write records (bench.studies.paper, bench) and the one that renders docs from them (bench.pages.render)."""
 from __future__ import annotations
 
 import contextlib
 import csv
 import os
 import platform
+import re
 import subprocess
 import sys
 import tempfile
@@ -15,22 +16,42 @@ from typing import Iterator
 
 ROOT = Path(__file__).resolve().parents[1]
 ENVS = ("light_switch_door", "doorknobs", "coffee")  # the built-in envs every record covers
-DISTRACTOR_ENVS = ("coffee_distractor", "doorknobs_distractor")  # variants where an object nearer the stuck robot is the wrong one (bench.selection)
+DISTRACTOR_ENVS = ("coffee_distractor", "doorknobs_distractor")  # variants where an object nearer the stuck robot is the wrong one (bench.studies.selection)
 RECORDS = ROOT / "docs" / "results"
-QUICKSTART = RECORDS / "quickstart.json"  # bench.quickstart: the README's first command per env
-SUITE = RECORDS / "suite.json"  # bench.suite: the README's second command
-SUITE_CLAIMS = RECORDS / "suite_claims.json"  # bench.suite --claims: the claim tests (-m claims)
-BENCH = ROOT / "bench" / "results.json"  # python -m bench: the benchmark table
-# The test seeds (first, count): every headline figure of the paper's envs and nothing else. If a result
-# on them ever motivates a change, they are spent (docs/RESULTS.md, Seeds).
-TEST_SEEDS = (200, 32)
+QUICKSTART = RECORDS / "quickstart.json"  # bench.timings.quickstart: the README's first command per env
+SUITE = RECORDS / "suite.json"  # bench.timings.suite: the README's second command
+SUITE_CLAIMS = RECORDS / "suite_claims.json"  # bench.timings.suite --claims: the claim tests (-m claims)
+BENCH = ROOT / "bench" / "results.json"  # python -m bench.timings.table: the benchmark table
 # Every test-seed set {first: count}: 200-231 the paper envs' headlines, 300-331 the studies past the paper,
 # 400-431 this round's new studies (and the learned selector's next verdict: 200-231 and 300-331 are spent
 # for it, the ledger's rows say why). Each run on them gets a ledger row (bench.ledger).
 TEST_SETS = {200: 32, 300: 32, 400: 32}
+PRESET_RUN = "ours_authors_preset"  # the records' name for ours with --preset authors (bench.studies.paper)
+CYCLES = (10, 25, 50, 100)  # the cycles the tables show, whose checkpoints the studies keep
 # {approach: the test-seed sets spent for it}: a result seen there motivated a change to it, so its records
 # there are history, judged against no bar (each has a spent row in the ledger: bench.ledger --spent).
 SPENT = {"ours_learned_selection": ("200-231", "300-331")}
+
+
+# Records written before bench/ was split by kind name their commands by the modules of then: each old
+# name's module today, so that a page shows a command that runs.
+RENAMED = {
+    **{name: f"studies.{name}" for name in ("paper", "plan_repair", "learners", "selection", "multi_novelty", "fix_length")},
+    **{name: f"timings.{name}" for name in (
+        "ab", "approaches", "cold_start", "devices", "doorknobs", "evaluation", "identical", "maple_q", "meta_policy",
+        "pytest_compile_time", "quickstart", "refusal", "scaling", "suite", "training", "update_parts", "updates")},
+    **{name: f"probes.{name}" for name in (
+        "bridge_steps", "decisions", "knob_offsets", "stuck_objects", "sweep", "low_level", "departures")},
+    "render": "pages.render", "results_blocks": "pages.results", "claims": "pages.claims",
+    "performance_blocks": "pages.performance", "fix_length_page": "pages.fix_length",
+    "multi_novelty_page": "pages.multi_novelty", "selection_history": "pages.selection_history", "report": "pages.report",
+}
+
+
+def current_command(command: str) -> str:
+    """A recorded command with today's module names (`RENAMED`; the old `python -m bench`: the table)."""
+    command = re.sub(r"python -m bench(?=\s|$)", "python -m bench.timings.table", command)
+    return re.sub(r"\bbench\.(\w+)\b", lambda m: "bench." + RENAMED.get(m[1], m[1]), command)
 
 
 def authors_seed_run_s() -> dict[str, float]:

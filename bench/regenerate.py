@@ -4,12 +4,12 @@ evidence issue's one regeneration).
     python -m bench.regenerate --change "CHANGE" --chosen-on "SEEDS"   # in a clean clone; hours
     python -m bench.regenerate --dry-run                                # the commands, in order
 
-Each step is a bench command as the docs print it: the paper's three envs (bench.paper), plan repair,
-the learners, the learned selector, Multi Novelty and the fix-length study, on their test seeds and then
-on their development seeds. --change and --chosen-on go to every test-seed step's ledger row. A finished
+Each step is a study's command as the docs print it (each study's `regenerate` declares its runs: the
+paper's three envs, plan repair, the learners, Multi Novelty and the fix-length study; not the learned
+selector, whose test sets are spent), on their test seeds and then on their development seeds. --change and --chosen-on go to every test-seed step's ledger row. A finished
 step is not run again (runs/regenerate.json) and each command resumes its own steps, so a regeneration
 stopped at any point continues where it left off: a step started before gets its ledger row again, saying
-that it was restarted. Uncommitted code is refused before anything runs. Then `python -m bench.render`,
+that it was restarted. Uncommitted code is refused before anything runs. Then `python -m bench.pages.render`,
 and the records, ledger and docs are committed from the clone.
 """
 from __future__ import annotations
@@ -19,22 +19,20 @@ import json
 import sys
 
 from bench.records import ROOT, check_clean, git_commit, refuse, run_child
+from bench.studies import studies
 from jaxbridge.utils.cli import run_main
 from jaxbridge.utils.files import write_atomic
 
-TEST = True  # a step on test seeds: it states its reason (--change, --chosen-on) in the ledger
-STEPS = (
-    *((f"paper {env}", ["bench.paper", "--env", env], TEST) for env in ("light_switch_door", "doorknobs", "coffee")),
-    *((f"plan repair {env}", ["bench.plan_repair", "--env", env], TEST)
-      for env in ("light_switch_door", "doorknobs", "coffee", "light_switch_panel")),
-    *((f"learners {env}", ["bench.learners", "--env", env], TEST) for env in ("light_switch_door", "doorknobs", "coffee")),
-    *((f"selection {env}", ["bench.selection", "--env", env], TEST)
-      for env in ("light_switch_door", "doorknobs", "coffee", "coffee_distractor", "doorknobs_distractor")),
-    ("multi novelty 300-331", ["bench.multi_novelty", "--seeds", "300-331"], TEST),
-    ("fix length 300-331", ["bench.fix_length", "--seeds", "300-331", "--gamma-lengths", "0", "--paper-envs", "none"], TEST),
-    ("multi novelty 0-7", ["bench.multi_novelty", "--seeds", "0-7"], not TEST),
-    ("fix length 0-7", ["bench.fix_length", "--seeds", "0-7"], not TEST),
-)
+
+
+def steps() -> list[tuple[str, list[str], bool]]:
+    """(name, the module and its flags, whether it runs on test seeds) of every study's regeneration runs
+    (each study's `regenerate`), test seeds first."""
+    found = [(f"{study.name} {' '.join(flags)}", [study.module, *flags], study.parse(list(flags)).on_test_seeds)
+             for study in studies() for flags in study.regenerate]
+    return sorted(found, key=lambda step: not step[2])
+
+
 STATE = ROOT / "runs" / "regenerate.json"
 
 
@@ -57,7 +55,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     state = json.loads(STATE.read_text()) if STATE.is_file() else {"started": [], "finished": {}}
     if args.dry_run:
-        for step in STEPS:
+        for step in steps():
             mark = "finished" if step[0] in state["finished"] else "started" if step[0] in state["started"] else "to run"
             print(f"{mark:8s}  {' '.join(command(step, argparse.Namespace(change='CHANGE', chosen_on='SEEDS'), False))}")
         return 0
@@ -70,7 +68,7 @@ def main(argv=None) -> int:
                "every record comes from one commit (remove the file to begin again)")
     state["commit"] = commit
     STATE.parent.mkdir(parents=True, exist_ok=True)
-    for step in STEPS:
+    for step in steps():
         name = step[0]
         if name in state["finished"]:
             continue
@@ -81,7 +79,7 @@ def main(argv=None) -> int:
         figures = run_child(command(step, args, restarted))
         state["finished"][name] = {"wall_s": figures["wall_s"], "peak_rss_mib": figures["peak_rss_mib"]}
         write_atomic(STATE, json.dumps(state, indent=2) + "\n")
-    print(f"bench.regenerate: every step finished at {commit}; now python -m bench.render", flush=True)
+    print(f"bench.regenerate: every step finished at {commit}; now python -m bench.pages.render", flush=True)
     return 0
 
 

@@ -1,9 +1,9 @@
-"""bench.sweep's reliability line (the figures docs/TUNING.md's evidence commands print) and its
+"""bench.probes.sweep's reliability line (the figures docs/TUNING.md's evidence commands print) and its
 config overrides."""
 import numpy as np
 import pytest
 
-from bench.sweep import reliability, swept_config, sweep_parser
+from bench.probes.sweep import reliability, swept_config, sweep_parser
 
 
 def test_the_sweeps_reliability_figures_count_late_dips_and_low_means():

@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from bench import render
+from bench.pages import render
 from bench.records import ROOT
 
 PAGES = ("README.md", "docs/RESULTS.md", "docs/PERFORMANCE.md",
@@ -73,5 +73,5 @@ def test_no_statement_the_records_contradict_comes_back(page):
 def test_the_typed_pages_are_out_of_docs_and_the_layout_names_every_study():
     assert not (ROOT / "docs" / "results" / "departures.md").exists() and not (ROOT / "docs" / "results" / "low_level.md").exists()
     layout = (ROOT / "README.md").read_text().split("## Layout", 1)[1]
-    studies = ("paper", "plan_repair", "learners", "selection", "multi_novelty", "fix_length")
-    assert [s for s in studies if f"bench.{s}" not in layout] == [] and "multi_novelty/" in layout
+    from bench.studies import NAMES
+    assert [s for s in NAMES if s not in layout] == [] and "multi_novelty/" in layout

@@ -228,10 +228,10 @@ def test_a_random_bridge_solves_short_fixes_and_no_long_ones(episodes):
     assert rate[8] == rate[12] == 0.0
 
 
-# ---- bench.fix_length's figures --------------------------------------------------------------------------
+# ---- bench.studies.fix_length's figures --------------------------------------------------------------------------
 
 def test_the_bench_finds_the_first_cycle_at_0_9_and_the_longest_k_solved_with_every_shorter_one():
-    from bench.fix_length import first_cycle, longest_solved, summary
+    from bench.studies.fix_length import first_cycle, longest_solved, summary
 
     solve = np.array([[0.0, 0.8, 1.0, 1.0], [0.0, 1.0, 0.9, 1.0]])  # the mean reaches 0.9 at cycle 2
     assert int(first_cycle(solve)) == 2 and int(first_cycle(solve[:, :1])) == 2  # never: one past the run
@@ -246,9 +246,9 @@ def test_the_bench_finds_the_first_cycle_at_0_9_and_the_longest_k_solved_with_ev
 def test_the_command_a_record_shows_parses_back_to_the_same_run(argv):
     import shlex
 
-    from bench.fix_length import command_line, parse_args, record_stem
+    from bench.studies.fix_length import STUDY
 
-    args = parse_args(argv)
-    shown = shlex.split(command_line(args))[3:]  # past "python -m bench.fix_length"
-    assert vars(parse_args(shown)) == vars(args)
-    assert record_stem(args) == ("fix_length-300-331" if args.seed_list[0] == 300 else "fix_length")
+    args = STUDY.parse(argv)
+    shown = shlex.split(args.command)[3:]  # past "python -m bench.studies.fix_length"
+    assert vars(STUDY.parse(shown)) == vars(args)
+    assert STUDY.stem(args) == ("fix_length-300-331" if args.seed_list[0] == 300 else "fix_length")

@@ -188,26 +188,25 @@ def test_the_function_caps_see_what_they_cap():
     assert not public("jaxbridge.api.training", "_plan")
 
 
-# bench/'s study pipelines (the records pages are made of: paper, plan repair, learners, selection,
-# departures, ...) go through the public API as train.py and eval.py do: `jaxbridge` and its utils. These
-# micro-benchmarks time or probe the package's parts, so they may import below the API:
+# bench/'s studies and pages (the records and the docs made of them) go through the public API as train.py
+# and eval.py do: `jaxbridge` and its utils. These timings and probes time or probe the package's parts,
+# so they may import below the API:
 BENCH_INSIDE = {
-    "__main__": "the suite's runner: configs and devices for the micro-benchmarks it times",
-    "bridge_steps": "counts a trained policy's bridge steps in the jitted cycle's own test rollout",
-    "decisions": "records the greedy test rollout's decisions (meta_policy.rollout)",
-    "devices": "seconds per jitted cycle on 1 vs 2 devices",
-    "doorknobs": "times Doorknobs' skill steps and the oracle's bare rollout",
-    "evaluation": "times an evaluation's parts: task batches, plan tables, rollouts",
-    "knob_offsets": "probes the Q-network's candidates at Doorknobs' knob offsets",
-    "maple_q": "times Maple Q's cycle part by part",
-    "meta_policy": "env steps/s of the bare meta-policy",
-    "report": "the comparison's rows (run/comparison) printed beside the authors' logged cells",
-    "scaling": "seconds as the seed count grows, per seed block",
-    "stuck_objects": "the paper's selection rule at the oracle's stuck states (meta_policy.rollout)",
-    "sweep": "times a --sweep's programs",
-    "training": "seconds for a run's compiled programs",
-    "update_parts": "where a learning step's time goes",
-    "updates": "times the double-DQN updates alone",
+    "timings/table": "the benchmark table's runner: configs and devices for the micro-benchmarks it times",
+    "probes/bridge_steps": "counts a trained policy's bridge steps in the jitted cycle's own test rollout",
+    "probes/decisions": "records the greedy test rollout's decisions (meta_policy.rollout)",
+    "timings/devices": "seconds per jitted cycle on 1 vs 2 devices",
+    "timings/doorknobs": "times Doorknobs' skill steps and the oracle's bare rollout",
+    "timings/evaluation": "times an evaluation's parts: task batches, plan tables, rollouts",
+    "probes/knob_offsets": "probes the Q-network's candidates at Doorknobs' knob offsets",
+    "timings/maple_q": "times Maple Q's cycle part by part",
+    "timings/meta_policy": "env steps/s of the bare meta-policy",
+    "timings/scaling": "seconds as the seed count grows, per seed block",
+    "probes/stuck_objects": "the paper's selection rule at the oracle's stuck states (meta_policy.rollout)",
+    "probes/sweep": "times a --sweep's programs",
+    "timings/training": "seconds for a run's compiled programs",
+    "timings/update_parts": "where a learning step's time goes",
+    "timings/updates": "times the double-DQN updates alone",
 }
 
 
@@ -221,6 +220,7 @@ def below_the_api(path: Path) -> set[str]:
 
 
 def test_only_the_listed_micro_benchmarks_import_below_the_public_api():
-    found = {path.stem: below for path in sorted((ROOT / "bench").glob("*.py")) if (below := below_the_api(path))}
+    found = {path.relative_to(ROOT / "bench").with_suffix("").as_posix(): below
+             for path in sorted((ROOT / "bench").rglob("*.py")) if (below := below_the_api(path))}
     assert set(found) <= set(BENCH_INSIDE), {name: found[name] for name in set(found) - set(BENCH_INSIDE)}
     assert set(BENCH_INSIDE) <= set(found), f"these no longer reach inside: strike them off BENCH_INSIDE: {set(BENCH_INSIDE) - set(found)}"

@@ -6,7 +6,8 @@ import subprocess
 
 import pytest
 
-from bench import ledger, paper, records
+from bench import ledger, records
+from bench.studies import paper
 from bench.records import RECORDS, TEST_SETS, uncommitted
 
 
@@ -20,8 +21,8 @@ def records_on_test_seeds():
 
 def on_test_seeds(step) -> bool:
     """A record's step that ran on test seeds: a training from a test set's first seed, an evaluation of
-    such a run (bench.training's cost steps train development seeds), or a step without a command, which
-    ran in the bench command's own process on the record's seeds (bench.fix_length's)."""
+    such a run (bench.timings.training's cost steps train development seeds), or a step without a command, which
+    ran in the bench command's own process on the record's seeds (bench.studies.fix_length's)."""
     if not isinstance(step, dict) or "commit" not in step:
         return False
     command = step.get("command")
@@ -77,31 +78,36 @@ REASON = ["--change", "first run", "--chosen-on", "-"]
 
 def test_a_dirty_checkout_cannot_write_a_record(tmp_path, own_ledger, monkeypatch, capsys):
     monkeypatch.setattr(records, "uncommitted", lambda: ["jaxbridge/core/meta_policy.py"])
+    runs = ["--runs", str(tmp_path / "runs")]
     with pytest.raises(SystemExit) as refused:
-        paper.main(["--env", "coffee", "--runs", str(tmp_path / "runs"), *REASON])
+        paper.STUDY.main(["--env", "coffee", *runs, *REASON])
     assert refused.value.code == 2 and not own_ledger.exists()
     err = capsys.readouterr().err.strip()
     assert "uncommitted changes (jaxbridge/core/meta_policy.py)" in err and "\n" not in err
 
-    args = paper.test_seed_args("bench.paper", "", "", ["--env", "coffee", "--runs", str(tmp_path / "runs"),
-                                                        "--allow-dirty", "--num-seeds", "2", *REASON])
+    args = paper.STUDY.parse(["--env", "coffee", *runs, "--allow-dirty", "--seeds", "200-201", *REASON])
+    paper.STUDY.begin(args)
     assert args.records == (tmp_path / "runs").resolve() / "records"  # outside docs/
     (row,) = ledger.rows()
-    assert (row["seeds"], row["env"], row["ran"]) == ("200-201", "coffee", "python -m bench.paper --env coffee --num-seeds 2")
+    assert (row["seeds"], row["env"], row["ran"]) == ("200-201", "coffee", "python -m bench.studies.paper --env coffee --seeds 200-201")
     assert row["commit"].endswith("+changes") and row["change"] == "first run"
 
 
 def test_code_changed_during_a_clean_run_writes_no_record(tmp_path, own_ledger, monkeypatch):
+    from bench.studies import selection
     changed = []
     monkeypatch.setattr(records, "uncommitted", lambda: list(changed))
-    args = paper.test_seed_args("bench.selection", "", "", ["--env", "coffee", "--runs", str(tmp_path), *REASON],
-                                seed_set=300)
-    assert args.records == RECORDS and ledger.rows()[0]["seeds"] == "300-331"
-    args.records = tmp_path / "records"
-    changed.append("jaxbridge/learn/dqn.py")
+
+    class Changing(selection.Selection):
+        def steps(self, args, steps):  # the code changes while the study runs
+            changed.append("jaxbridge/learn/dqn.py")
+            return {}
+
     with pytest.raises(SystemExit) as refused:
-        paper.records_folder(args)
-    assert refused.value.code == 2 and not args.records.exists()
+        Changing().main(["--env", "coffee", "--seeds", "300-331", "--runs", str(tmp_path), "--records",
+                         str(tmp_path / "records"), *REASON])
+    assert refused.value.code == 2 and not (tmp_path / "records").exists()
+    assert ledger.rows()[0]["seeds"] == "300-331"
 
 
 def test_the_ledger_command_appends_a_row_and_refuses_seeds_outside_the_sets(own_ledger, capsys):
@@ -129,14 +135,14 @@ def test_every_set_spent_for_an_approach_has_its_spent_row():
     assert records.SPENT and all(set(sets) <= spent for sets in records.SPENT.values())
 
 
-def test_a_command_on_development_or_test_seeds_writes_a_row_only_for_a_test_set(own_ledger, monkeypatch, capsys):
-    """bench.multi_novelty and bench.fix_length (`ledger.begin_on_seeds`): development seeds leave the ledger
-    alone; test seeds need their reasons, and a range leaving its set is refused."""
-    from bench import multi_novelty
+def test_a_study_on_development_or_test_seeds_writes_a_row_only_for_a_test_set(own_ledger, monkeypatch, capsys):
+    """Every study begins the same way (bench/study.py): development seeds leave the ledger alone; test
+    seeds need their reasons, and a range leaving its set is refused."""
+    from bench.studies import multi_novelty
     monkeypatch.setattr(records, "uncommitted", lambda: [])
-    begin = lambda *flags: ledger.begin_on_seeds("bench.multi_novelty", "multi_novelty", (a := multi_novelty.parse(
-        list(flags))).seed_list, multi_novelty.command_line(a), a)
-    assert begin("--seeds", "0-7") is False and not own_ledger.exists()
+    begin = lambda *flags: multi_novelty.STUDY.begin(multi_novelty.STUDY.parse(list(flags)))
+    begin("--seeds", "0-7")
+    assert not own_ledger.exists()
     for flags, message in ((("--seeds", "300-301"), "needs --change and --chosen-on"),
                            (("--seeds", "330-333", *REASON), "not within a test-seed set")):
         with pytest.raises(SystemExit) as refused:
@@ -145,22 +151,25 @@ def test_a_command_on_development_or_test_seeds_writes_a_row_only_for_a_test_set
     begin("--seeds", "300-331", "--cycles", "50", *REASON)
     (row,) = ledger.rows()
     assert (row["seeds"], row["env"], row["ran"]) == ("300-331", "multi_novelty",
-                                                      "python -m bench.multi_novelty --seeds 300-331 --cycles 50")
+                                                      "python -m bench.studies.multi_novelty --seeds 300-331 --cycles 50")
 
 
 def test_the_one_regeneration_runs_the_command_of_every_committed_study_record():
-    """bench.regenerate's steps are every study's bench command: a study added without a step fails here
-    (performance records are re-measured at HEAD by their own commands, not regenerated)."""
+    """bench.regenerate's steps are every study's command: a study added without a step fails here
+    (performance records are re-measured at HEAD by their own commands, not regenerated; records on a set
+    spent for one of their approaches are history, not regenerated)."""
     from bench import regenerate
-    performance = ("python -m pytest", "bash bench/gpu.sh", "python -m bench.maple_q")
-    made = {" ".join(["python", "-m", *module]) for _, module, _ in regenerate.STEPS}
+    performance = ("python -m pytest", "bash bench/gpu.sh", "python -m bench.timings.maple_q")
+    steps = regenerate.steps()
+    made = {" ".join(["python", "-m", *module]) for _, module, _ in steps}
     for path in sorted(RECORDS.glob("**/*.json")):
         record = json.loads(path.read_text())
-        command = record.get("command") if isinstance(record, dict) else None
-        if command and not command.startswith(performance):
+        command = records.current_command(record["command"]) if isinstance(record, dict) and "command" in record else None
+        spent = any(record.get("seeds") in records.SPENT.get(name, ()) for name in record.get("approaches", ())) if command else False
+        if command and not command.startswith(performance) and not spent:
             assert command in made, f"{path}: bench.regenerate has no step '{command}'"
-    on_test_seeds = {" ".join(module) for _, module, test in regenerate.STEPS if test}
-    assert {"bench.paper --env coffee", "bench.selection --env doorknobs_distractor"} <= on_test_seeds
+    on_test_seeds = {" ".join(module) for _, module, test in steps if test}
+    assert {"bench.studies.paper --env coffee", "bench.studies.multi_novelty --seeds 300-331"} <= on_test_seeds
 
 
 def test_the_regeneration_refuses_to_start_without_its_ledger_reasons(capsys):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from run_helpers import train
 
-from bench.low_level import main as low_level_table
+from bench.probes.low_level import main as low_level_table
 
 from envs_jax import env_class
 from envs_jax.base import BridgeAction, BridgeObs
@@ -185,7 +185,7 @@ def test_train_runs_ours_and_low_level_baselines_into_one_table_eval_and_resume(
     resumed = train("--resume", str(experiment), "--no-progress", timeout=600)
     assert resumed.returncode == 0, resumed.stderr
     assert (experiment / "low_level_ppo_callplanner" / "metrics.csv").read_bytes() == before
-    # bench.low_level's table: training steps per seed so far, and who ever solved a test task
+    # bench.probes.low_level's table: training steps per seed so far, and who ever solved a test task
     low_level_table([str(experiment)])
     out = capsys.readouterr().out
     solved = int(any(float(r["test_solve_rate"]) > 0 for r in rows))

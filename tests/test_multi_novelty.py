@@ -290,9 +290,9 @@ def test_an_oracle_episode_draws_with_its_doors_opened_by_the_bridge_and_the_ski
 
 # ---- the study's page --------------------------------------------------------------------------------------
 def test_the_page_answers_whether_one_bridge_suffices_on_each_set():
-    """bench.multi_novelty_page: one bridge meets a bar, only a per-signature bridge does, or none does;
+    """bench.pages.multi_novelty: one bridge meets a bar, only a per-signature bridge does, or none does;
     and the kind alone each approach named solves least."""
-    from bench.multi_novelty_page import answer
+    from bench.pages.multi_novelty import answer
 
     def cells(**by_name):
         return {name: {"test": (t, (t - 0.1, t + 0.05)), "held_out": (h, (h - 0.1, h + 0.05))}

@@ -1,6 +1,6 @@
 """The learner's optimiser is optax's clip-then-Adam to the bit, and unlike it gives a seed the same
 numbers whether its seed block shares a device or not (jaxbridge/learn/optim.py says why). A whole training
-run in blocks is checked by `python -m bench.devices --seed-block 2`, too slow for the suite."""
+run in blocks is checked by `python -m bench.timings.devices --seed-block 2`, too slow for the suite."""
 import os
 import subprocess
 import sys

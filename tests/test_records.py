@@ -6,7 +6,8 @@ import re
 
 import pytest
 
-from bench import paper, render
+from bench import study
+from bench.pages import render
 from bench.records import ROOT
 
 
@@ -14,7 +15,7 @@ from bench.records import ROOT
 def test_the_docs_are_what_their_records_render(doc):
     text = (ROOT / doc).read_text()
     assert render.BLOCK.search(text), f"{doc} has no generated block"
-    assert render.stale_blocks(text) == [], f"{doc} differs from its records: run python -m bench.render"
+    assert render.stale_blocks(text) == [], f"{doc} differs from its records: run python -m bench.pages.render"
 
 
 def test_a_number_edited_by_hand_is_caught():
@@ -33,27 +34,27 @@ def test_an_unknown_block_is_refused():
 
 
 def test_the_headline_quotes_the_authors_logged_numbers():
-    rows = render.results_blocks.authors_rows("light_switch_door")
-    cells = render.results_blocks.authors_test_cells(rows["ours"], (10, 25, 50, 100))
+    rows = render.results.authors_rows("light_switch_door")
+    cells = render.results.authors_test_cells(rows["ours"], (10, 25, 50, 100))
     assert cells == ["0.33 [0, 1]", "0.72 [0, 1]", "0.57 [0, 1]", "0.64 [0, 1]"]
-    single = render.results_blocks.authors_test_cells(rows["pure_planning"], (10, 25))
+    single = render.results.authors_test_cells(rows["pure_planning"], (10, 25))
     assert single == ["0 (single evaluation)", ""]
 
 
 def test_a_finished_step_is_not_run_again_and_keeps_the_commit_it_ran_at(tmp_path):
     calls = []
-    steps = paper.Steps(tmp_path / "steps.json")
+    steps = study.Steps(tmp_path / "steps.json")
     first = steps.run("train", lambda: calls.append(1) or {"wall_s": 1.0})
-    assert first["wall_s"] == 1.0 and first["commit"] == paper.git_commit()
-    again = paper.Steps(tmp_path / "steps.json")  # a later call of the command
+    assert first["wall_s"] == 1.0 and first["commit"] == study.git_commit()
+    again = study.Steps(tmp_path / "steps.json")  # a later call of the command
     assert again.run("train", lambda: calls.append(2) or {"wall_s": 9.0}) == first
     assert calls == [1]
     assert json.loads((tmp_path / "steps.json").read_text()) == {"train": first}
 
 
 def test_a_step_restarted_after_a_stop_shows_its_time_as_a_lower_bound():
-    # paper.train_step marks a training resumed from its checkpoints: its seconds count from the restart
-    seconds_text = render.results_blocks.seconds_text
+    # study.train_step marks a training resumed from its checkpoints: its seconds count from the restart
+    seconds_text = render.results.seconds_text
     whole = {"wall_s": 1234.0, "steps": {"train": {"wall_s": 1000.0}, "sweep": {"wall_s": 234.0}}}
     assert seconds_text(whole) == "1,234 s" and seconds_text(whole["steps"]["train"]) == "1,000 s"
     restarted = {**whole, "steps": {**whole["steps"], "train": {"wall_s": 600.0, "resumed": True}}}
@@ -63,7 +64,7 @@ def test_a_step_restarted_after_a_stop_shows_its_time_as_a_lower_bound():
 
 
 def test_a_claims_verdict_follows_its_stated_rule():
-    from bench import claims
+    from bench.pages import claims
     row = lambda mean, low, high: {"test_solve_rate_mean": mean, "test_solve_rate_mean_low": low, "test_solve_rate_mean_high": high}
     steady = {c: row(0.95, 0.85, 1.0) for c in range(1, 101)}
     assert claims.converges(steady).holds
@@ -87,7 +88,7 @@ def test_a_claims_verdict_follows_its_stated_rule():
 
 
 def test_no_claim_is_reproduced_where_the_preset_is_not_measured():
-    from bench import claims
+    from bench.pages import claims
     rows = [line.split(" | ") for line in claims.claims_table().splitlines()[2:]]
     assert rows and all(not (r[3] == "not measured" and "**reproduced" in r[4]) for r in rows)
     coffee_stuck = next(r for r in rows if "gets stuck" in r[0] and "Coffee" in r[1])

@@ -108,7 +108,7 @@ class Coffee(NoveltyEnv):
     # Fewer updates: a cycle yields few bridge decisions, and 1000 updates overfit them (docs/TUNING.md).
     # A discount per env step: the 4-cup test tasks leave a few steps to spare, and with one discount per
     # decision every twist that makes the jug graspable is worth the same, however many steps it takes
-    # (docs/TUNING.md, `python -m bench.bridge_steps`). Tested on the authors' tasks, their logged runs'.
+    # (docs/TUNING.md, `python -m bench.probes.bridge_steps`). Tested on the authors' tasks, their logged runs'.
     train_defaults: ClassVar[dict] = {"updates_per_cycle": 250, "step_gamma": 0.94, "test_protocol": "authors"}
     test_protocols = world.TEST_PROTOCOLS
     authors_defaults: ClassVar[dict] = {"n_sample": 10, "test_protocol": "authors",

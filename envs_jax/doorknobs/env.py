@@ -146,7 +146,7 @@ class Doorknobs(NoveltyEnv):
     # through the opened door; the clipped, twin-network targets stop the Q drift; with the loop guard (which
     # stops a greedy bridge turning an open or clipped knob until the horizon) 500 updates a cycle learn
     # fastest (1000 drift again, 100-250 learn the slow seed later). Feature noise makes the knob turn carry
-    # over to doorways the one training map never showed (bench.knob_offsets).
+    # over to doorways the one training map never showed (bench.probes.knob_offsets).
     train_defaults = {"call_planner_bonus": 0.5, "updates_per_cycle": 500, "clip_bootstrap": True, "q_ensemble": 2,
                       "feature_noise": 0.01}
     authors_defaults = {"n_sample": 10, "env_quirks": ("raw_offsets",)}

@@ -39,7 +39,7 @@ AUTHORS = {
     "param_samples": "iid",  # independent parameter samples in the argmax
 }
 
-# PQN's values (learn/pqn.py), chosen on Light Switch Door's tuning seeds 0-7 (bench/learners.py says how).
+# PQN's values (learn/pqn.py), chosen on Light Switch Door's tuning seeds 0-7 (bench/studies/learners.py says how).
 PQN = {
     "learner": "pqn",
     "learning_rate": 1e-4,  # smaller steps: without a buffer each cycle refits on its own decisions

@@ -3,7 +3,7 @@ the paper's results section (test solve rate at cycles 10/25/50/100, smooth rewa
 value a mean or IQM over seeds with its 95% bootstrap interval (utils/stats).
 
 Everything is read back from each approach's metrics.csv, so the files can be rebuilt from a finished
-(or partly finished) experiment at any time: `python -m bench.report runs/<env>`.
+(or partly finished) experiment at any time: `python -m bench.pages.report runs/<env>`.
 """
 from __future__ import annotations
 

@@ -30,7 +30,7 @@ from jaxbridge.utils.progress import ExperimentProgress
 
 EXPERIMENT_FILE = "experiment.json"
 SCHEDULE_FILE = "schedule.json"  # the wall time and each device's busy seconds (run/scheduling.py)
-# Seconds per approach in `python -m bench.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
+# Seconds per approach in `python -m bench.timings.approaches` (Light Switch Door, 8 seeds, 2 at a time): the
 # longest start first, so the workers finish close together. The plan-repair baselines are not measured
 # there; they share no CallPlanner's machinery and are ordered as it.
 COST = {"maple_q": 200, "no_feature_selection": 172, "no_callplanner": 172, "ours": 111, "random": 20, "pure_planning": 15}

@@ -1,0 +1,49 @@
+"""The test suite's wall time, as the README's second command runs it, into docs/results/suite.json; with
+--claims, the paper's claims on every env (tests/test_claims.py, `-m claims`) into suite_claims.json.
+
+    python -m bench.timings.suite [--claims]
+
+Runs `python -m pytest` from the repository root (its persistent compilation cache as it is: run it on a
+fresh clone, as CI does, for the figure docs/PERFORMANCE.md quotes) and records the wall time, the
+outcome line and the machine.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+import time
+
+from bench.records import DIRTY_RECORDS, ROOT, SUITE, SUITE_CLAIMS, check_clean, git_commit, machine
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.timings.suite", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--claims", action="store_true",
+                        help="time the claim tests (python -m pytest -m claims) instead of the default suite")
+    parser.add_argument("--allow-dirty", action="store_true",
+                        help=f"time code with uncommitted changes: the record goes to {DIRTY_RECORDS.relative_to(ROOT)}/, not docs/")
+    args = parser.parse_args(argv)
+    command, path = (["-m", "pytest", "-m", "claims"], SUITE_CLAIMS) if args.claims else (["-m", "pytest"], SUITE)
+    if check_clean("bench.timings.suite", args.allow_dirty):
+        path = DIRTY_RECORDS / path.name
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, *command], cwd=ROOT, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    outcome = next((line.strip("= ") for line in reversed(proc.stdout.splitlines()) if re.search(r"\d+ passed", line)), "")
+    if proc.returncode != 0:
+        sys.stdout.write(proc.stdout[-5000:])
+        raise SystemExit(f"bench.timings.suite: the suite failed (exit {proc.returncode}); nothing recorded")
+    record = {"command": " ".join(["python", *command]), "wall_s": round(wall, 1), "outcome": outcome,
+              "commit": git_commit(check_clean("bench.timings.suite", args.allow_dirty, during=True)), "machine": machine()}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(record, indent=2) + "\n")
+    print(f"bench.timings.suite: {outcome} in {wall:.0f} s -> {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
