@@ -23,21 +23,7 @@ from pathlib import Path
 
 import jaxbridge
 from jaxbridge.utils import compile_cache
-from jaxbridge.utils.cli import ArgumentParser, non_negative_int, positive_float, positive_int, run_main
-
-
-def task_sizes(text: str) -> dict[str, int]:
-    """--task-size NAME=N[,NAME=N...] as a dict (argparse type)."""
-    sizes = {}
-    for item in filter(None, (part.strip() for part in text.split(","))):
-        name, _, value = item.partition("=")
-        try:
-            sizes[name.strip()] = int(value)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected NAME=N[,NAME=N...], got {text!r}") from None
-    if not sizes:
-        raise argparse.ArgumentTypeError(f"expected NAME=N[,NAME=N...], got {text!r}")
-    return sizes
+from jaxbridge.utils.cli import ArgumentParser, name_values, non_negative_int, positive_float, positive_int, run_main
 
 
 def parse_args(argv):
@@ -58,7 +44,7 @@ def parse_args(argv):
                         help="with --sweep: seed of the sweep's task draw (default: 0)")
     parser.add_argument("--sweep-out", type=Path, default=None, metavar="DIR",
                         help="with --sweep: where sweep_novelties.png/.md/.csv go (default: the first RUN)")
-    parser.add_argument("--task-size", type=task_sizes, default=None, metavar="NAME=N[,NAME=N]",
+    parser.add_argument("--task-size", type=name_values, default=None, metavar="NAME=N[,NAME=N]",
                         help="with a RUN: evaluate on --num-tasks tasks per seed of these sizes instead of its test "
                              "tasks (the env's sized_task: light_switch_door cells=, doors=; doorknobs map=, doors=; "
                              "coffee cups=)")
@@ -193,9 +179,7 @@ def main(argv=None) -> int:
         print(episodes.table())
         if args.attention:
             looked = policy.attention(episodes, args.rollout_seed)
-            print("attention on the fix's object, per seed: " + ", ".join(
-                f"{s} {a:.2f} of {n}" for s, a, n in zip(looked.seeds, looked.agreement, looked.decisions))
-                + f"; all {looked.overall:.2f}")
+            print(looked.per_seed())
             print(looked.diagnosis())
         draw(args, policy, episodes)
     else:

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import jaxbridge
 from jaxbridge.utils import compile_cache, distributed
-from jaxbridge.utils.cli import (ArgumentParser, auto_or_positive_int, non_negative_int, positive_float, positive_int,
-                                 positive_int_list, run_main)
+from jaxbridge.utils.cli import (ArgumentParser, auto_or_positive_int, names_from, non_negative_int, positive_float,
+                                 positive_int, positive_int_list, run_main)
 from jaxbridge.utils.interrupts import EXIT_INTERRUPTED, Interrupts, run_watched
 
 EXIT_NUMERICAL, EXIT_CANNOT_WRITE = 3, 4
@@ -41,21 +41,6 @@ CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "learner", "num_
                 "episodes_per_cycle", "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus",
                 "checkpoint_every", "keep_cycles", "seed_block", "low_level_budget")
 DEFAULTS = jaxbridge.TrainConfig()
-
-
-def approach_list(text: str) -> list[str] | str:
-    """argparse type: "all" (the env's: the paper's six and any other its default names) or a comma-separated
-    list of approach names."""
-    if text.strip() == "all":
-        return "all"
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    known = jaxbridge.ALL_APPROACHES
-    if not names or any(n not in known for n in names):
-        unknown = ', '.join(n for n in names if n not in known) or repr(text)
-        raise argparse.ArgumentTypeError(f"unknown approach {unknown}; choose from all, {', '.join(known)}")
-    if len(set(names)) != len(names):
-        raise argparse.ArgumentTypeError(f"an approach is listed twice in {text!r}")
-    return names
 
 
 def chosen_learner(argv) -> tuple[str | None, str | None]:
@@ -83,7 +68,7 @@ def parse_args(argv):
                    help="which of the env's test-task distributions to evaluate on, e.g. authors: Coffee's 4 cups "
                         "with horizon 100, Light Switch Door's fixed horizon 30 (default: the preset's, else the "
                         "env's first)")
-    p.add_argument("--approaches", type=approach_list, default=None, metavar="LIST",
+    p.add_argument("--approaches", type=names_from(jaxbridge.ALL_APPROACHES, "approach"), default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (the six and what the env's default adds; default: "
                         f"the paper's figure for the env: the six, {', '.join(jaxbridge.APPROACHES)}; doorknobs: all but "
                         "no_feature_selection, as the paper's Doorknobs figure; multi_novelty: ours, the learned selector, the "

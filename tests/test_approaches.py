@@ -105,19 +105,19 @@ def test_the_command_line_and_every_env_name_only_registered_approaches():
     registered name is accepted alone and all together, a name given twice or unknown is refused; each env's
     default figure names registered ones, the paper's envs only the six."""
     import argparse
-    import importlib.util
 
+    import jaxbridge
     from envs_jax import BUILTIN, KNOBS, VARIANTS, WORLDS, env_class
+    from jaxbridge.utils.cli import names_from
     from jaxbridge.api.training import all_approaches, default_approaches
-    spec = importlib.util.spec_from_file_location("train_cli", ROOT / "train.py")
-    train_py = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(train_py)
-    assert train_py.approach_list("all") == "all" and len(APPROACHES) == 6 and "ours" in APPROACHES
-    assert all(train_py.approach_list(name) == [name] for name in KNOWN)
-    assert train_py.approach_list(" , ".join(KNOWN)) == list(KNOWN)
+    assert list(jaxbridge.ALL_APPROACHES) == list(KNOWN)
+    approach_list = names_from(jaxbridge.ALL_APPROACHES, "approach")  # train.py --approaches' type
+    assert approach_list("all") == "all" and len(APPROACHES) == 6 and "ours" in APPROACHES
+    assert all(approach_list(name) == [name] for name in KNOWN)
+    assert approach_list(" , ".join(KNOWN)) == list(KNOWN)
     for text, message in (("ours,ours", "listed twice"), ("ours,clever", "unknown approach clever")):
         with pytest.raises(argparse.ArgumentTypeError, match=message):
-            train_py.approach_list(text)
+            approach_list(text)
     for env in BUILTIN + VARIANTS + KNOBS + WORLDS:
         defaults, every = default_approaches(env_class(env)), all_approaches(env_class(env))
         assert set(defaults) <= set(every) <= set(KNOWN) and every[:6] == list(APPROACHES), env

@@ -8,9 +8,9 @@ FLOORS = ("planner", "envs_jax", "jaxbridge.utils", "jaxbridge.core", "jaxbridge
           "jaxbridge.run", "jaxbridge.api")
 PACKAGES = ("planner", "envs_jax", "jaxbridge")
 # Caps by principle, not by today's sizes: a module is one idea read in one sitting (past 500 lines it
-# holds two: split it), and a command line is flags and calls of the public API (past 250 lines logic has
+# holds two: split it), and a command line is flags and calls of the public API (past 200 lines logic has
 # crept in: move it into jaxbridge.api).
-MAX_MODULE_LINES, MAX_SCRIPT_LINES = 500, 250
+MAX_MODULE_LINES, MAX_SCRIPT_LINES = 500, 200
 SCRIPTS = ("train.py", "eval.py")
 
 
@@ -61,7 +61,7 @@ def test_no_module_outgrows_its_cap():
 
 # The pages a reader opens first stay short enough to read whole: the results' headlines, claims and seeds
 # (each study on its own page), and each design page one subject.
-MAX_PAGE_LINES = {"docs/RESULTS.md": 250, "docs/DESIGN.md": 400, "docs/design/*.md": 400}
+MAX_PAGE_LINES = {"docs/RESULTS.md": 250, "docs/PERFORMANCE.md": 150, "docs/DESIGN.md": 400, "docs/design/*.md": 400}
 
 
 def test_no_results_or_design_page_outgrows_its_cap():

@@ -34,6 +34,11 @@ class Attention:
         """Over every such decision of every seed."""
         return self._over_decisions(self.agreement)
 
+    def per_seed(self) -> str:
+        """eval.py --attention's first line (bench.studies.selection reads it back): each seed's agreement."""
+        return "attention on the fix's object, per seed: " + ", ".join(
+            f"{s} {a:.2f} of {n}" for s, a, n in zip(self.seeds, self.agreement, self.decisions)) + f"; all {self.overall:.2f}"
+
     def diagnosis(self) -> str:
         """eval.py --attention's second line: the premise, where misses looked, and the seeds that look right
         but fail (what the network does with the object, not which it picks)."""

@@ -55,6 +55,36 @@ def auto_or_positive_int(text: str) -> int | None:
     return None if text.strip() == "auto" else _int_at_least(text, 1, "auto or a positive integer")
 
 
+def name_values(text: str) -> dict[str, int]:
+    """argparse type: NAME=N[,NAME=N...] as a dict (e.g. eval.py --task-size cells=40,doors=8)."""
+    sizes = {}
+    for item in filter(None, (part.strip() for part in text.split(","))):
+        name, _, value = item.partition("=")
+        try:
+            sizes[name.strip()] = int(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected NAME=N[,NAME=N...], got {text!r}") from None
+    if not sizes:
+        raise argparse.ArgumentTypeError(f"expected NAME=N[,NAME=N...], got {text!r}")
+    return sizes
+
+
+def names_from(known, what: str, everything: str = "all"):
+    """argparse type: a comma-separated list of `what`s among `known`, each once, or `everything` itself."""
+    def names(text: str) -> list[str] | str:
+        if text.strip() == everything:
+            return everything
+        listed = [n.strip() for n in text.split(",") if n.strip()]
+        unknown = [n for n in listed if n not in known]
+        if not listed or unknown:
+            raise argparse.ArgumentTypeError(f"unknown {what} {', '.join(unknown) or repr(text)}; choose from "
+                                             f"{everything}, {', '.join(known)}")
+        if len(set(listed)) != len(listed):
+            raise argparse.ArgumentTypeError(f"an {what} is listed twice in {text!r}")
+        return listed
+    return names
+
+
 def run_main(main, argv=None) -> int:
     """Run `main(argv)`; turn an InputError (bad input, from the API or the flags) into `error: ...` on
     stderr and exit code 2."""
