@@ -148,7 +148,8 @@ def _pddl_and(atoms) -> str:
 
 
 def domain_pddl(domain: Domain) -> str:
-    """The domain as PDDL text (:strips :typing), e.g. for an external planner."""
+    """The domain as PDDL text (:strips :typing), e.g. for an external planner; each action's skill and
+    slot variable ride in a `; skill: NAME slot: ?var` comment line that planner.pddl reads back."""
     preds = []
     for name, types in domain.predicates.items():
         args = " ".join(f"?a{i} - {t}" for i, t in enumerate(types))
@@ -157,8 +158,10 @@ def domain_pddl(domain: Domain) -> str:
     for op in domain.operators:
         params = " ".join(f"{v} - {t}" for v, t in op.params)
         effect = [_pddl_atom(a) for a in op.add] + [f"(not {_pddl_atom(a)})" for a in op.delete]
+        # PDDL has no place for the skill and its slot: a comment that planner.pddl reads back.
+        note = f"; skill: {op.skill}" + (f" slot: {op.slot_param}" if op.slot_param else "")
         actions.append(
-            f"  (:action {op.name}\n    :parameters ({params})\n"
+            f"  (:action {op.name}\n    {note}\n    :parameters ({params})\n"
             f"    :precondition {_pddl_and(_pddl_atom(a) for a in op.pre)}\n"
             f"    :effect {_pddl_and(effect)})")
     return (f"(define (domain {domain.name})\n  (:requirements :strips :typing)\n"
