@@ -291,7 +291,7 @@ def test_an_oracle_episode_draws_with_its_doors_opened_by_the_bridge_and_the_ski
 # ---- the study's page --------------------------------------------------------------------------------------
 def test_the_page_answers_whether_one_bridge_suffices_on_each_set():
     """bench.pages.multi_novelty: one bridge meets a bar, only a per-signature bridge does, or none does;
-    and the kind alone each approach named solves least."""
+    the kind alone each approach named solves least; an approach whose seeds are spent is judged in nothing."""
     from bench.pages.multi_novelty import answer
 
     def cells(**by_name):
@@ -300,10 +300,15 @@ def test_the_page_answers_whether_one_bridge_suffices_on_each_set():
     kinds = [{"approach": name, "kind": kind, "mean": str(mean), "low": "0", "high": "1"}
              for name, means in (("ours", (1.0, 0.7)), ("ours_learned_selection", (0.9, 0.4)), ("ours_per_signature", (0.6, 0.8)))
              for kind, mean in zip(("keycard", "both"), means)]
-    text = answer(cells(ours=(0.6, 0.3), ours_learned_selection=(0.94, 0.2), ours_per_signature=(0.5, 0.85)), kinds)
+    text = answer(cells(ours=(0.6, 0.3), ours_learned_selection=(0.94, 0.2), ours_per_signature=(0.5, 0.85)), kinds, set())
     assert text.startswith("On the test tasks, one bridge for every kind suffices: ours, learned selection 0.94")
     assert ("On the held-out combinations, one bridge does not suffice (ours 0.30 [0.20, 0.35]); ours, a bridge per "
             "signature 0.85 [0.75, 0.90] meets the bar of 0.8.") in text
     assert text.endswith("ours, both (0.70); ours, learned selection, both (0.40); ours, a bridge per signature, keycard (0.60).")
-    none = answer(cells(ours=(0.6, 0.3), ours_learned_selection=(0.7, 0.2), ours_per_signature=(0.5, 0.1)), kinds)
+    none = answer(cells(ours=(0.6, 0.3), ours_learned_selection=(0.7, 0.2), ours_per_signature=(0.5, 0.1)), kinds, set())
     assert "On the test tasks, no approach reaches the bar of 0.9: the best is ours, learned selection 0.70" in none
+    spent = answer(cells(ours=(0.6, 0.3), ours_learned_selection=(0.94, 0.2), ours_per_signature=(0.5, 0.85)), kinds,
+                   {"ours_learned_selection"})
+    assert spent.startswith("ours, learned selection is not judged here: these seeds are spent for it.")
+    assert "On the test tasks, no approach reaches the bar of 0.9: the best is ours 0.60" in spent
+    assert "learned selection, both" not in spent  # nor among the kinds each one-bridge approach solves least
