@@ -85,3 +85,34 @@ def test_a_training_builds_each_programs_setup_once(monkeypatch, tmp_path):
     jaxbridge.prepare("light_switch_door", ["random"], seeds=2, cycles=1, out=tmp_path, name="sweep",
                       sweep={"gamma": (0.8, 0.9)}).release()
     assert whole() == ["random"]
+
+
+class FirstCycle(Exception):
+    """Raised where the first cycle would start: what came before it is the training's preparation."""
+
+
+def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_and_draws_each_seeds_tasks_once(monkeypatch, tmp_path):
+    import train
+    from envs_jax.light_switch_door.env import LightSwitchDoor
+    from jaxbridge.api import config as api_config, training as api_training
+    from jaxbridge.core import tasks
+    from jaxbridge.learn.online import Cycle
+
+    counts: dict = {}
+
+    def counting(key, fn):
+        def counted(*args, **kwargs):
+            counts[key(*args)] = counts.get(key(*args), 0) + 1
+            return fn(*args, **kwargs)
+        return counted
+    monkeypatch.setattr(api_config, "load_env", counting(lambda env: "env resolved", api_config.load_env))
+    monkeypatch.setattr(api_training, "load_env", counting(lambda env: "env resolved", api_training.load_env))
+    monkeypatch.setattr(api_config, "_check_fits_env", counting(lambda *a: "config checked", api_config._check_fits_env))
+    draw = LightSwitchDoor.train_tasks.__func__
+    monkeypatch.setattr(LightSwitchDoor, "train_tasks", classmethod(counting(lambda cls, seed, _: seed, draw)))
+    tasks._drawn_train_tasks.cache_clear()  # earlier tests of this process drew these seeds too
+    monkeypatch.setattr(Cycle, "__call__", lambda self, learners: (_ for _ in ()).throw(FirstCycle()))
+    with pytest.raises(FirstCycle):
+        train.main(["--env", "light_switch_door", "--approaches", "ours,random,no_callplanner", "--num-seeds", "2",
+                    "--first-seed", "3", "--cycles", "1", "--workers", "1", "--no-progress", "--out", str(tmp_path)])
+    assert counts == {"env resolved": 1, "config checked": 1, 3: 1, 4: 1}

@@ -20,6 +20,12 @@ def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = 
     checks it (InputError in one line: an unknown env, field or learner, a value out of range, a quirk or
     test protocol the env lacks, episodes that overflow the replay buffer, a seed block above the seeds;
     a learner of your own is checked against the learner contract when a training is prepared)."""
+    return config_and_env(env, seeds, cycles, settings, **overrides)[0]
+
+
+def config_and_env(env: EnvLike | None = None, seeds: int | Sequence[int] | None = None, cycles: int | None = None,
+                   settings: Sequence[str] | None = None, **overrides) -> tuple[TrainConfig, type]:
+    """`make_config`'s config with the env class it resolved, so that a training resolves its env once."""
     given = {field: value for field, value in overrides.items() if value is not None}
     if seeds is not None:
         listed = seed_list(seeds)
@@ -36,7 +42,7 @@ def make_config(env: EnvLike | None = None, seeds: int | Sequence[int] | None = 
     with refusing("set"):
         config = dataclasses.replace(config, **setting_values(settings or [], config))
     _check_fits_env(config, env_cls)
-    return config
+    return config, env_cls
 
 
 def setting_values(texts: Sequence[str], config: TrainConfig) -> dict:

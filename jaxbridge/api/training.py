@@ -12,10 +12,11 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from jaxbridge.api.config import make_config
+from jaxbridge.api.config import config_and_env
 from jaxbridge.api.envs import EnvLike, load_env
 from jaxbridge.core import grid
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.tasks import train_specs
 from jaxbridge.learn.approaches import APPROACHES, get_approach
 from jaxbridge.learn.online import TrainOutput
 from jaxbridge.learn.setup import make_setup
@@ -168,8 +169,7 @@ def prepare(env: EnvLike | None = None, approaches: str | Sequence[str] | None =
     program's setup is built here once; the checks and the training read it."""
     if name is not None:
         rundir.check_name(name)
-    config = make_config(env, seeds, cycles, **overrides)
-    env_cls = load_env(config.env)
+    config, env_cls = config_and_env(env, seeds, cycles, **overrides)
     names = (default_approaches(env_cls) if approaches is None else all_approaches(env_cls) if approaches == "all"
              else _approach_list(approaches))
     hyper_grid = _sweep_grid(sweep, config)
@@ -327,7 +327,7 @@ def _check_memory(config: TrainConfig, env_cls, names: list[str], hyper_grid: di
 
 def _check_reachable(config: TrainConfig, env_cls) -> None:
     """Refuse a training horizon too short for some seed's training task ever to reach its goal."""
-    needed = {seed: max(spec.min_steps for spec in env_cls.train_tasks(seed, config.episodes_per_cycle))
+    needed = {seed: max(spec.min_steps for spec in train_specs(env_cls, seed, config.episodes_per_cycle))
               for seed in config.seeds}
     worst = max(needed, key=needed.get)
     if config.train_steps < needed[worst]:

@@ -1,6 +1,7 @@
 """Batches of tasks ready for the device: padded task arrays, plan tables and horizons."""
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -71,16 +72,33 @@ def test_specs(env_cls: type[NoveltyEnv], seed: int, num_tasks: int = 10, protoc
     """The seed's test tasks under one of the env's `test_protocols` (None: its default, the first);
     ValueError for a protocol the env does not have."""
     default = next(iter(env_cls.test_protocols))
-    if protocol is None or protocol == default:
-        return env_cls.test_tasks(seed, num_tasks)  # an env with one protocol need not take the keyword
-    if protocol not in env_cls.test_protocols:
+    if protocol is not None and protocol != default and protocol not in env_cls.test_protocols:
         raise ValueError(f"{env_cls.name} has no test protocol {protocol!r}; it has {', '.join(env_cls.test_protocols)}")
-    return env_cls.test_tasks(seed, num_tasks, protocol=protocol)
+    return list(_drawn_test_tasks(env_cls, seed, num_tasks, None if protocol == default else protocol))
+
+
+def train_specs(env_cls: type[NoveltyEnv], seed: int, episodes: int) -> list:
+    """The seed's training tasks, one per episode of a cycle."""
+    return list(_drawn_train_tasks(env_cls, seed, episodes))
+
+
+# A seed's tasks are drawn once per process: a run's checks, its programs' setups and its task batches all
+# read the same draw (an env's draw is a function of the seed alone, env/base.py's contract).
+@functools.lru_cache(maxsize=1 << 14)
+def _drawn_train_tasks(env_cls: type[NoveltyEnv], seed: int, episodes: int) -> tuple:
+    return tuple(env_cls.train_tasks(seed, episodes))
+
+
+@functools.lru_cache(maxsize=1 << 14)
+def _drawn_test_tasks(env_cls: type[NoveltyEnv], seed: int, num_tasks: int, protocol: str | None) -> tuple:
+    if protocol is None:
+        return tuple(env_cls.test_tasks(seed, num_tasks))  # an env with one protocol need not take the keyword
+    return tuple(env_cls.test_tasks(seed, num_tasks, protocol=protocol))
 
 
 def training_specs(env_cls: type[NoveltyEnv], seeds: Sequence[int], episodes: int) -> tuple[list, list[int]]:
     """Every seed's training tasks, one per episode of a cycle (seed-major order), and the seed each belongs to."""
-    specs = [spec for seed in seeds for spec in env_cls.train_tasks(seed, episodes)]
+    specs = [spec for seed in seeds for spec in _drawn_train_tasks(env_cls, seed, episodes)]
     return specs, [seed for seed in seeds for _ in range(episodes)]
 
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from envs_jax import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.tasks import make_batch, test_specs
+from jaxbridge.core.tasks import make_batch, test_specs, train_specs
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.errors import InputError
 from planner.tables import compile_task, table_shape
@@ -59,7 +59,7 @@ def task_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
     """One seed's training and test tasks with their plan tables (the first seed's, compiled), which every
     approach of an experiment shares."""
     seed = config.first_seed
-    specs = env_cls.train_tasks(seed, config.episodes_per_cycle) + test_specs(env_cls, seed, config.num_test_tasks,
+    specs = train_specs(env_cls, seed, config.episodes_per_cycle) + test_specs(env_cls, seed, config.num_test_tasks,
                                                                               config.test_protocol)
     return tree_bytes(make_batch(env_cls, specs, [seed] * len(specs)).arrays)
 
