@@ -156,7 +156,7 @@ class NoveltyEnv(abc.ABC):
     num_features: ClassVar[int]
     full_state_size: ClassVar[int]
     domain: ClassVar[Any]
-    # Training hyperparameters where this env departs from TrainConfig's defaults (TrainConfig.for_env).
+    # Training hyperparameters where this env departs from TrainConfig's defaults (jaxbridge.make_config).
     train_defaults: ClassVar[dict] = {}
     # How `eval.py RUN --sweep novelties` grows this env's tasks (None: no sweep).
     novelty_sweep: ClassVar[NoveltySweep | None] = None

@@ -1,5 +1,6 @@
 """Each baseline and ablation differs from our method exactly by its defining difference
 (the authors' code), checked on the rollouts it produces and on the program it compiles to."""
+import jaxbridge
 from collections import Counter
 from dataclasses import replace
 from pathlib import Path
@@ -220,15 +221,15 @@ def test_random_and_pure_planning_leave_the_network_untouched():
 
 
 def test_env_defaults_sit_between_the_paper_defaults_and_explicit_overrides():
-    assert TrainConfig.for_env("light_switch_door") == TrainConfig()
-    doorknobs = TrainConfig.for_env("doorknobs")
+    assert jaxbridge.make_config("light_switch_door") == TrainConfig()
+    doorknobs = jaxbridge.make_config("doorknobs")
     assert doorknobs.env == "doorknobs" and doorknobs.call_planner_bonus == 0.5
-    assert TrainConfig.for_env("doorknobs", call_planner_bonus=0.0).call_planner_bonus == 0.0
-    coffee = TrainConfig.for_env("coffee")
+    assert jaxbridge.make_config("doorknobs", call_planner_bonus=0.0).call_planner_bonus == 0.0
+    coffee = jaxbridge.make_config("coffee")
     assert coffee.updates_per_cycle == 250 and coffee.call_planner_bonus == 0.0
-    assert TrainConfig.for_env("coffee", updates_per_cycle=1000).updates_per_cycle == 1000
+    assert jaxbridge.make_config("coffee", updates_per_cycle=1000).updates_per_cycle == 1000
     with pytest.raises(ValueError, match="unknown env"):
-        TrainConfig.for_env("nowhere")
+        jaxbridge.make_config("nowhere")
 
 
 @pytest.mark.parametrize("env,message", [

@@ -7,6 +7,7 @@ float path decides it.
 Training every approach on every env takes minutes (compiling each approach's cycle is most of it), more
 than the suite's budget: these tests carry the `claims` mark and run with `python -m pytest -m claims`
 (docs/PERFORMANCE.md), not in the default suite."""
+import jaxbridge
 from dataclasses import dataclass
 from functools import cache
 
@@ -16,7 +17,6 @@ import pytest
 
 from envs_jax.base import BridgeObs
 from jaxbridge.core.bridges import make_bridge
-from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import make_batch
 from jaxbridge.learn.online import Cycle
@@ -51,7 +51,7 @@ class Run:
 
 @cache
 def train(env: str, approach: str) -> Run:
-    setup = make_setup(TrainConfig.for_env(env, approach=approach, num_seeds=SEEDS, **BUDGETS[env]))
+    setup = make_setup(jaxbridge.make_config(env, approach=approach, num_seeds=SEEDS, **BUDGETS[env]))
     cycle, learners = Cycle(setup), setup.init_learners()
     history, rates = [learners], []
     for _ in range(setup.config.cycles):

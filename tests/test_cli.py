@@ -1,4 +1,5 @@
 """The command lines: a short real training run, evaluating its checkpoint, and clean errors."""
+import jaxbridge
 import csv
 import json
 import subprocess
@@ -251,19 +252,18 @@ def test_train_runs_the_papers_figure_by_default_and_says_what_it_leaves_out(tmp
     monkeypatch.setenv("JAXBRIDGE_CACHE_DIR", str(tmp_path / "jax"))  # a machine that has trained nothing
     from envs_jax import env_class
     from jaxbridge.api.training import _start_line as start_line, default_approaches
-    from jaxbridge.core.config import TrainConfig
 
     doorknobs = env_class("doorknobs")
     approaches = default_approaches(doorknobs)  # the paper's Doorknobs figure: no feature selection timed out
     assert approaches == ["ours", "no_callplanner", "random", "pure_planning", "maple_q"]
-    line = start_line(TrainConfig.for_env("doorknobs"), doorknobs, approaches, None)
+    line = start_line(jaxbridge.make_config("doorknobs"), doorknobs, approaches, None)
     assert line.startswith("doorknobs: training ours, no CallPlanner, random bridge, pure planning, Maple Q (pure RL) x 8 seeds")
     assert "not no feature selection" in line and "--approaches all adds it" in line
     assert default_approaches(env_class("coffee")) == ["ours", "no_feature_selection", "no_callplanner", "random",
                                                        "pure_planning", "maple_q"]
-    assert "not " not in start_line(TrainConfig.for_env("coffee"), env_class("coffee"), ["ours"], None)
+    assert "not " not in start_line(jaxbridge.make_config("coffee"), env_class("coffee"), ["ours"], None)
     multi = env_class("multi_novelty")  # its default: the question's approaches, the full-state ones with `all`
-    mine = start_line(TrainConfig.for_env("multi_novelty"), multi, default_approaches(multi), None)
+    mine = start_line(jaxbridge.make_config("multi_novelty"), multi, default_approaches(multi), None)
     assert "a bridge per signature" in mine and "not no feature selection, Maple Q (pure RL)" in mine
     assert "no time estimate until this machine has trained each of them once" in line
 
@@ -272,13 +272,12 @@ def test_the_start_line_estimates_from_this_machines_own_pace(tmp_path, monkeypa
     monkeypatch.setenv("JAXBRIDGE_CACHE_DIR", str(tmp_path / "jax"))
     from envs_jax import env_class
     from jaxbridge.api.training import _start_line as start_line
-    from jaxbridge.core.config import TrainConfig
     from jaxbridge.utils import pace
 
     at = lambda seed_cycle_s, compile_s: {"seed_cycle_s": seed_cycle_s, "compile_s": compile_s}
     pace.record("coffee", {"ours": at(0.15, 20), "random": at(0.03, 10)})  # measured here
     pace.record("coffee", {"maple_q": at(0.3, 30)})  # a later run adds to what is known
-    config, coffee = TrainConfig.for_env("coffee", num_seeds=8), env_class("coffee")
+    config, coffee = jaxbridge.make_config("coffee", num_seeds=8), env_class("coffee")
     assert pace.estimate("coffee", ["ours", "random", "maple_q"], 800, workers=2) == 30 + 0.3 * 800  # the longest
     assert pace.estimate("coffee", ["ours", "random"], 800, workers=1) == 20 + 10 + (0.15 + 0.03) * 800
     assert pace.estimate("coffee", ["ours", "no_callplanner"], 800, workers=2) is None  # never trained here

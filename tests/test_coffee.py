@@ -1,6 +1,7 @@
 """Coffee: every dynamics branch of envs.md §4.4 and their priority, the predicates, each skill reaching
 its operator's effects, pouring into several cups, task generation, features, jit/vmap, and the
 meta-policy with the oracle bridge and with pure planning, and the authors' shared repeated-state flag."""
+import jaxbridge
 from dataclasses import dataclass
 
 import jax
@@ -463,10 +464,10 @@ def test_pick_jug_at_the_stuck_state_sets_the_authors_flag_which_fails_the_plann
 def test_the_quirk_is_named_by_the_authors_preset_and_unknown_quirks_are_refused():
     from jaxbridge.core.config import TrainConfig
     from jaxbridge.learn.setup import make_setup
-    setup = make_setup(TrainConfig.for_env("coffee", "authors", num_seeds=1))
+    setup = make_setup(jaxbridge.make_config("coffee", preset="authors", num_seeds=1))
     assert setup.train_env.shared_repeat_flag and setup.test_env.shared_repeat_flag
-    assert not make_setup(TrainConfig.for_env("coffee", num_seeds=1)).train_env.shared_repeat_flag
+    assert not make_setup(jaxbridge.make_config("coffee", num_seeds=1)).train_env.shared_repeat_flag
     with pytest.raises(ValueError, match="has no quirk 'shared_repeat_flag'"):
-        make_setup(TrainConfig.for_env("doorknobs", num_seeds=1, env_quirks=("shared_repeat_flag",)))
-    config = TrainConfig.for_env("coffee", "authors")
+        make_setup(jaxbridge.make_config("doorknobs", num_seeds=1, env_quirks=("shared_repeat_flag",)))
+    config = jaxbridge.make_config("coffee", preset="authors")
     assert TrainConfig.from_dict(config.to_dict()) == config and config.to_dict()["env_quirks"] == ["shared_repeat_flag"]

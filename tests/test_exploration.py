@@ -2,12 +2,12 @@
 the learner (and so the compiled program) as it was, on it wraps every learner and resumes exactly."""
 from __future__ import annotations
 
+import jaxbridge
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from run_helpers import trained_whole_and_resumed
 
-from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn import dqn, pqn
 from jaxbridge.learn.exploration import (TABLE_SIZE, CountExploration, count_bonus, observation_slots,
                                          with_exploration)
@@ -45,21 +45,21 @@ def test_the_bonus_is_paid_once_per_episode_per_observation_and_shrinks_with_the
 
 @pytest.mark.parametrize("learner", ["dqn", "pqn"])
 def test_off_the_learner_is_the_plain_one_and_on_it_is_wrapped_and_keeps_the_contract(learner):
-    plain = TrainConfig.for_env(SEQUENCE, learner=learner, num_seeds=1)
+    plain = jaxbridge.make_config(SEQUENCE, learner=learner, num_seeds=1)
     setup = make_setup(plain)
     made = {"dqn": dqn.make_learner, "pqn": pqn.make_learner}[learner](plain, setup.train_env, 3, False)
     assert plain.count_bonus == 0 and with_exploration(made, plain) is made  # the factory's own learner: today's program
     assert type(setup.learner) is type(made)
-    on = make_setup(TrainConfig.for_env(SEQUENCE, learner=learner, num_seeds=1, count_bonus=0.1))
+    on = make_setup(jaxbridge.make_config(SEQUENCE, learner=learner, num_seeds=1, count_bonus=0.1))
     assert isinstance(on.learner, CountExploration) and type(on.learner.inner) is type(made) and on.learner.scale == 0.1
     check_learner(on.learner, on.config)
     for approach in ("no_feature_selection", "maple_q", "no_callplanner"):  # every approach that learns
-        config = TrainConfig.for_env(SEQUENCE, approach=approach, learner=learner, num_seeds=1, count_bonus=0.1)
+        config = jaxbridge.make_config(SEQUENCE, approach=approach, learner=learner, num_seeds=1, count_bonus=0.1)
         assert isinstance(make_setup(config).learner, CountExploration)
 
 
 def test_with_the_bonus_a_run_checkpoints_its_counts_and_resumes_exactly(tmp_path):
-    config = TrainConfig.for_env(SEQUENCE, num_seeds=1, cycles=2, episodes_per_cycle=2, num_test_tasks=2,
+    config = jaxbridge.make_config(SEQUENCE, num_seeds=1, cycles=2, episodes_per_cycle=2, num_test_tasks=2,
                                  updates_per_cycle=10, buffer_capacity=256, checkpoint_every=1, count_bonus=0.1)
     setup = make_setup(config)
     whole, crashed = trained_whole_and_resumed(setup, tmp_path, crash_at=2)

@@ -32,7 +32,7 @@ def one_seed_tasks(setup):
 @pytest.mark.parametrize("learner", ["dqn", "pqn"])
 def test_both_learners_keep_the_contract_on_features_and_on_the_full_state(env, learner):
     for approach in ("ours", "maple_q"):  # the object-centric features; the full state (DQN: split off)
-        config = TrainConfig.for_env(env, approach=approach, learner=learner, num_seeds=1)
+        config = jaxbridge.make_config(env, approach=approach, learner=learner, num_seeds=1)
         setup = make_setup(config)
         assert check_learner(setup.learner, config, one_seed_tasks(setup)) is setup.learner
 
@@ -78,7 +78,7 @@ def test_pqn_targets_are_q_lambda_returns_backwards_through_the_decisions():
 
 
 def test_a_pqn_run_resumes_to_the_same_metrics_and_its_evaluation_finds_its_test_rate(tmp_path):
-    config = TrainConfig.for_env("light_switch_door", "pqn", num_seeds=2, cycles=3, episodes_per_cycle=2,
+    config = jaxbridge.make_config("light_switch_door", preset="pqn", num_seeds=2, cycles=3, episodes_per_cycle=2,
                                  pqn_epochs=4, checkpoint_every=1, num_test_tasks=2)
     trained_whole_and_resumed(make_setup(config), tmp_path, crash_at=3)
     whole = (tmp_path / "whole" / "metrics.csv").read_bytes()

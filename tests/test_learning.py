@@ -1,5 +1,6 @@
 """The learner: epsilon schedule, double-DQN targets, replay buffer, transitions, seeding, checkpoints."""
 
+import jaxbridge
 from dataclasses import replace
 
 import chex
@@ -495,7 +496,7 @@ def test_a_cycles_fit_perturbs_each_update_by_that_updates_own_noise():
     """A cycle's fit draws its minibatch feature noise for all its updates at once: it fits as the same
     updates made one at a time, each drawing its own noise (`update_step` without `noise`), to float
     tolerance, and the noise reaches the fit (without it the parameters differ)."""
-    config = TrainConfig.for_env("light_switch_door", num_seeds=1, feature_noise=0.1, updates_per_cycle=6,
+    config = jaxbridge.make_config("light_switch_door", num_seeds=1, feature_noise=0.1, updates_per_cycle=6,
                                  batch_size=16)
     learning = make_setup(config).learner
     item = dqn.empty_transition(learning)
@@ -523,7 +524,7 @@ def test_a_fit_leaves_out_the_weights_of_the_inputs_its_training_tasks_never_fil
     rest (as task constants, zero) does, to float tolerance, and leaves the rest's weights, their Adam
     moments, input scaling and target rows exactly as they were: no gradient reaches them."""
     from envs_jax.doorknobs.env import Doorknobs
-    config = TrainConfig.for_env("doorknobs", preset, approach="maple_q", num_seeds=1, updates_per_cycle=20,
+    config = jaxbridge.make_config("doorknobs", preset=preset, approach="maple_q", num_seeds=1, updates_per_cycle=20,
                                  **({"fit_patience": 5} if preset == "authors" else {}))
     cut = make_setup(config).learner
     split = cut.split

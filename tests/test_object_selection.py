@@ -1,5 +1,6 @@
 """The learned object selector (issue 37): its network reads any number of objects in any order, looks only
 at objects a skill can act on, and the approach trains, checkpoints and evaluates as every other."""
+import jaxbridge
 import re
 
 import jax
@@ -118,7 +119,7 @@ def test_a_learned_selectors_feature_noise_leaves_what_an_object_is_exact_unless
     """Feature noise on object tokens perturbs each token's features and offsets; its type's one-hot and its
     interactable flag stay exact (drawn only for the entries it perturbs), unless `attention_kind_noise`."""
     from jaxbridge.learn import dqn
-    config = TrainConfig.for_env("coffee", approach="ours_learned_selection", feature_noise=0.1,
+    config = jaxbridge.make_config("coffee", approach="ours_learned_selection", feature_noise=0.1,
                                  attention_kind_noise=kind_noise)
     env = env_class("coffee")()
     learning = dqn.make_dqn(config, env, len(token_slots(env)) * token_width(env))

@@ -1,5 +1,6 @@
 """`--preset`: every value a preset sets reaches the config the learner uses, and its test tasks; the
 authors' learner options do what they say."""
+import jaxbridge
 import dataclasses
 
 import jax
@@ -45,7 +46,7 @@ def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_gua
     cycle's rollouts run with."""
     from jaxbridge.learn import online
 
-    assert all(TrainConfig.for_env(env).loop_guard for env in ENVS)
+    assert all(jaxbridge.make_config(env).loop_guard for env in ENVS)
     nested = TrainConfig().to_dict()  # a version-6 config was flat, without the learner's name
     old_run = {**{k: v for k, v in nested.items() if k not in ("loop_guard", "learner")},
                **{k: v for k, v in nested["learner"].items() if k != "name"}}
@@ -59,7 +60,7 @@ def test_the_loop_guard_reaches_every_rollout_of_the_cycle(monkeypatch, loop_gua
         return original_rollout(policy, *args, **kwargs)
 
     monkeypatch.setattr(online, "rollout", recording_rollout)
-    setup = make_setup(TrainConfig.for_env("doorknobs", num_seeds=1, loop_guard=loop_guard))
+    setup = make_setup(jaxbridge.make_config("doorknobs", num_seeds=1, loop_guard=loop_guard))
     learner = jax.tree.map(lambda x: x[0], setup.init_learners())
     one = lambda batch: jax.tree.map(lambda x: x[: len(x) // setup.config.num_seeds], batch.arrays)
     jax.eval_shape(online.make_seed_cycle(setup), learner, one(setup.train), one(setup.test), Hyper.of(setup.config))
@@ -86,13 +87,13 @@ def test_the_authors_test_tasks_coffee_four_cups_horizon_100_are_both_presets_de
         config = make_config(env="coffee", preset=preset, num_seeds=2)
         test = make_setup(config).test
         assert {len(s.cups) for s in test.specs} == {4} and set(test.arrays.horizons.tolist()) == {100}
-    variant = make_setup(TrainConfig.for_env("coffee", num_seeds=2, test_protocol="jaxbridge")).test
+    variant = make_setup(jaxbridge.make_config("coffee", num_seeds=2, test_protocol="jaxbridge")).test
     assert {len(s.cups) for s in variant.specs} == {1, 2, 3, 4} and set(variant.arrays.horizons.tolist()) == {110}
 
 
 @pytest.mark.parametrize("env", ENVS)
 def test_the_jaxbridge_preset_is_the_default_config(env):
-    assert make_config(env=env) == TrainConfig.for_env(env) == TrainConfig.for_env(env, "jaxbridge")
+    assert make_config(env=env) == jaxbridge.make_config(env) == jaxbridge.make_config(env, preset="jaxbridge")
     assert make_config(env=env).preset == "jaxbridge"
 
 
@@ -144,13 +145,13 @@ def test_the_output_layer_starts_at_zero_or_uniform_as_pytorch(ensemble):
     values = np.concatenate([np.ravel(v) for v in output])
     assert np.all(np.abs(values) <= 1 / np.sqrt(8)) and np.abs(values).max() > 0.5 / np.sqrt(8)
     assert np.asarray(uniform.apply(params, x)).std() > 0
-    assert TrainConfig.for_env("coffee", "authors").output_init == "uniform" == make_config(
+    assert jaxbridge.make_config("coffee", preset="authors").output_init == "uniform" == make_config(
         env="coffee", preset="authors").output_init and TrainConfig().output_init == "zero"
 
 
 def test_the_target_starts_as_a_copy_or_apart():
     def learner(target_init):
-        config = TrainConfig.for_env("light_switch_door", num_seeds=1, target_init=target_init)
+        config = jaxbridge.make_config("light_switch_door", num_seeds=1, target_init=target_init)
         return make_setup(config).init_learners()
 
     copy, apart = learner("copy"), learner("apart")
@@ -163,7 +164,7 @@ def test_the_target_starts_as_a_copy_or_apart():
 @pytest.mark.parametrize("reset", [False, True])
 def test_the_optimizer_is_new_for_each_cycles_fit_only_when_asked(reset):
     """Adam's step count after a cycle: carried on from the last cycle, or counted from 0 again."""
-    config = TrainConfig.for_env("light_switch_door", num_seeds=1, updates_per_cycle=3, reset_optimizer=reset)
+    config = jaxbridge.make_config("light_switch_door", num_seeds=1, updates_per_cycle=3, reset_optimizer=reset)
     setup = make_setup(config)
     learner = jax.tree.map(lambda x: x[0], setup.init_learners())
     clip, (adam, scale) = learner.opt_state
@@ -189,7 +190,7 @@ def test_minmax_scaling_is_fitted_to_the_stored_inputs_and_targets_and_scales_th
     input and its output is scaled back."""
     from jaxbridge.learn.dqn import fit_scaling
     from jaxbridge.learn.q_bridge import encode
-    config = TrainConfig.for_env("light_switch_door", "authors", num_seeds=1)
+    config = jaxbridge.make_config("light_switch_door", preset="authors", num_seeds=1)
     setup = make_setup(config)
     dqn, learner = setup.learner, jax.tree.map(lambda x: x[0], setup.init_learners())
     empty = fit_scaling(dqn, learner.buffer, jnp.zeros(config.buffer_capacity), None)
@@ -221,7 +222,7 @@ def test_minmax_scaling_of_a_split_full_state_equals_scaling_the_whole_input():
     the whole input would be; the entries its 2x2 training maps leave unfilled are zero, and so is their
     shift (fit_scaling's), so the split leaves them out."""
     from jaxbridge.learn.q_bridge import SplitInput, TaskPart, encode, encode_action
-    config = TrainConfig.for_env("doorknobs", "authors", num_seeds=1, approach="maple_q")
+    config = jaxbridge.make_config("doorknobs", preset="authors", num_seeds=1, approach="maple_q")
     setup = make_setup(config)
     dqn, learner = setup.learner, jax.tree.map(lambda x: x[0], setup.init_learners())
     split, width = dqn.split, dqn.num_features + dqn.env.num_skills + 2
@@ -258,7 +259,7 @@ def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_r
     from jaxbridge.learn.dqn import fit_until_no_better, relabel, update_step
     from jaxbridge.learn.online import Cycle
     from jaxbridge.learn.replay import sample_indices
-    config = TrainConfig.for_env("light_switch_door", "authors", num_seeds=1, fit_patience=20, updates_per_cycle=400)
+    config = jaxbridge.make_config("light_switch_door", preset="authors", num_seeds=1, fit_patience=20, updates_per_cycle=400)
     setup = make_setup(config)
     cycle = Cycle(setup)
     learners, _ = cycle(cycle.seeds.place(setup.init_learners()))  # one cycle: a filled buffer

@@ -2,6 +2,7 @@
 refusals, one program for the leaf hyperparameters, each setting equal to a plain run) and its exact
 continuation on two processes on localhost (jax.distributed), also when one setting saved more cycles
 than the others."""
+import jaxbridge
 import csv
 import dataclasses
 import shutil
@@ -102,7 +103,7 @@ def test_a_two_by_two_sweep_writes_a_run_and_a_row_per_setting(swept):
 
 
 def test_each_setting_equals_a_plain_run_with_it_byte_for_byte(swept, tmp_path):
-    config = TrainConfig.for_env("light_switch_door", num_seeds=4, cycles=4, updates_per_cycle=30,
+    config = jaxbridge.make_config("light_switch_door", num_seeds=4, cycles=4, updates_per_cycle=30,
                                  checkpoint_every=2, learning_rate=3e-4, epsilon_decay=1e-3)
     train(make_setup(config), tmp_path, RunHooks(progress=False))
     slot = swept / "ours@learning_rate=0.0003,epsilon_decay=0.001"

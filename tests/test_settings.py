@@ -39,9 +39,9 @@ def test_a_learners_settings_are_set_and_read_by_name_and_saved_nested():
 
 
 def test_a_preset_leaves_out_what_the_learner_lacks_and_the_hyper_leaves_are_the_leaf_settings():
-    coffee = TrainConfig.for_env("coffee")  # its env defaults: updates_per_cycle 250 (double DQN's), step_gamma
+    coffee = jaxbridge.make_config("coffee")  # its env defaults: updates_per_cycle 250 (double DQN's), step_gamma
     assert coffee.updates_per_cycle == 250
-    pqn = TrainConfig.for_env("coffee", learner="pqn")
+    pqn = jaxbridge.make_config("coffee", learner="pqn")
     assert type(pqn.learner) is PQNSettings and pqn.step_gamma == coffee.step_gamma
     assert list(vars(Hyper.of(pqn))["values"]) == ["learning_rate", "gamma", "grad_clip", "q_lambda",
                                                    "call_planner_bonus", "epsilon_start", "epsilon_end", "epsilon_decay"]
@@ -79,7 +79,7 @@ def test_a_learner_registered_by_name_brings_its_settings():
     from jaxbridge.learn.learners import register
 
     register("mc_by_name", make_learner)  # what a built-in learner's registration line does
-    config = TrainConfig.for_env("light_switch_door", learner="mc_by_name", epochs=3)
+    config = jaxbridge.make_config("light_switch_door", learner="mc_by_name", epochs=3)
     assert type(config.learner) is MonteCarloSettings and (config.learner.epochs, config.learner.memory) == (3, 20)
     assert TrainConfig.from_dict(json.loads(json.dumps(config.to_dict()))) == config
 

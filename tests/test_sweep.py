@@ -1,6 +1,7 @@
 """The generalisation sweep: every env's sweep tasks have the stated number of novelties and are solvable
 within their scaled horizon (by the oracle bridge, while pure planning fails them), and the sweep
 groups episodes by count, marks what an approach cannot see, and writes its table, CSV and plot."""
+import jaxbridge
 import csv
 import io
 from dataclasses import dataclass
@@ -69,7 +70,7 @@ class FakePolicy:
 
 
 def test_sweep_groups_episodes_by_seed_and_count_and_marks_what_an_approach_cannot_see():
-    config = TrainConfig.for_env("light_switch_door", num_seeds=2, first_seed=4)
+    config = jaxbridge.make_config("light_switch_door", num_seeds=2, first_seed=4)
     batches = []
     good = FakePolicy(config, {4: {1, 2, 3}, 5: {1, 3}}, batches=batches)
     blind = FakePolicy(config, {4: set(), 5: set()}, full_state=True, batches=batches)

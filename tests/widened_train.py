@@ -3,12 +3,12 @@ after its first cycle, into OUT/ours. Its own process: 2 virtual CPU devices mus
 
     python tests/widened_train.py OUT
 """
+import jaxbridge
 import sys
 from pathlib import Path
 
 import jax
 
-from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.hooks import RunHooks
 from jaxbridge.run.runner import train_settings
@@ -16,7 +16,7 @@ from jaxbridge.run.runner import train_settings
 if __name__ == "__main__":
     jax.config.update("jax_num_cpu_devices", 2)
     out, (first, second) = Path(sys.argv[1]), jax.local_devices()
-    config = TrainConfig.for_env("light_switch_door", num_seeds=3, cycles=3, updates_per_cycle=20, checkpoint_every=1)
+    config = jaxbridge.make_config("light_switch_door", num_seeds=3, cycles=3, updates_per_cycle=20, checkpoint_every=1)
     offered = []
 
     def widen(wanted):  # the second device, once, whatever the timing says

@@ -30,7 +30,7 @@ CYCLES = (25, 100)  # the table's columns (a shorter run reports its last cycle)
 def rows(env: str) -> dict[str, tuple[dict, dict]]:
     """{departure: (our values, the authors' values)} of every switchable departure where they differ on `env`."""
     ours, theirs = jaxbridge.preset_values("jaxbridge", env), jaxbridge.preset_values("authors", env)
-    base = TrainConfig.for_env(env)
+    base = jaxbridge.make_config(env)
     groups = {"clip_bootstrap": ("clip_bootstrap", "q_ensemble"),  # Doorknobs' two guards are one departure
               "fit_patience": ("fit_patience", "updates_per_cycle")}  # the fitting schedule is one
     grouped = {f for fields in groups.values() for f in fields}
@@ -48,7 +48,7 @@ def rows(env: str) -> dict[str, tuple[dict, dict]]:
 def runs(env: str, names: list[str], directions: list[str]) -> dict[str, TrainConfig]:
     """{run name: config} of the references and each row's runs."""
     table = rows(env)
-    default, authors = TrainConfig.for_env(env), TrainConfig.for_env(env, "authors")
+    default, authors = jaxbridge.make_config(env), jaxbridge.make_config(env, preset="authors")
     out = {"default": default, "authors": authors}
     for name in names:
         mine, theirs = table[name]

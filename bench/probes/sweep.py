@@ -6,6 +6,7 @@ evidence of docs/TUNING.md).
 """
 from __future__ import annotations
 
+import jaxbridge
 import argparse
 import time
 
@@ -34,7 +35,7 @@ def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cy
 
 def swept_config(args) -> tuple[TrainConfig, dict]:
     """The env's config for the chosen seeds and cycles with the overrides applied, and the overrides."""
-    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
+    config = jaxbridge.make_config(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
     return with_overrides(config, args.overrides)
 
 

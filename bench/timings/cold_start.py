@@ -20,7 +20,7 @@ from jaxbridge.utils import compile_cache
 compile_cache.enable(sys.argv[1])
 from bench.timings.training import measure_cycles
 import jaxbridge
-config = jaxbridge.TrainConfig.for_env(sys.argv[2], approach=sys.argv[3], num_seeds=int(sys.argv[4]), cycles=2)
+config = jaxbridge.make_config(sys.argv[2], approach=sys.argv[3], num_seeds=int(sys.argv[4]), cycles=2)
 run = measure_cycles(config, jaxbridge.local_devices(), 2)
 print(json.dumps({"first_cycle_s": run["times"][0], **run["first"].as_dict()}))
 """

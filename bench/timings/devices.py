@@ -9,6 +9,7 @@ On a CPU-only machine the N devices are virtual CPU devices (one per core is wha
 """
 from __future__ import annotations
 
+import jaxbridge
 import argparse
 import time
 
@@ -27,11 +28,10 @@ def main() -> None:
 
     from jaxbridge.learn.devices import SeedMesh, select_devices
     devices = select_devices(args.devices)  # before JAX starts: virtual CPU devices
-    from jaxbridge.core.config import TrainConfig
     from jaxbridge.learn.online import Cycle
     from jaxbridge.learn.setup import make_setup
 
-    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds, seed_block=args.seed_block)
+    config = jaxbridge.make_config(args.env, num_seeds=args.num_seeds, seed_block=args.seed_block)
     setup = make_setup(config)
     layouts = {}
     for n in (1, args.devices):

@@ -10,6 +10,7 @@ task, so its episodes run to the horizon, the slowest case for a rollout.
 """
 from __future__ import annotations
 
+import jaxbridge
 import argparse
 import os
 import statistics
@@ -20,14 +21,13 @@ import jax
 import numpy as np
 
 from envs_jax import BUILTIN
-from jaxbridge.core.config import TrainConfig
 from jaxbridge.run.evaluate import TrainedPolicy, load_policy
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.core.tasks import evaluation_batch
 
 
 def fresh_policy(env: str, num_seeds: int) -> TrainedPolicy:
-    config = TrainConfig.for_env(env, num_seeds=num_seeds)
+    config = jaxbridge.make_config(env, num_seeds=num_seeds)
     setup = make_setup(config)
     return TrainedPolicy(setup, 0, setup.init_learners())
 

@@ -18,6 +18,7 @@ whole per-seed cycle.
 """
 from __future__ import annotations
 
+import jaxbridge
 import argparse
 import json
 import statistics
@@ -33,7 +34,6 @@ import numpy as np
 
 from bench.records import DIRTY_RECORDS, RECORDS, ROOT, check_clean, git_commit, machine, shown
 from bench.timings.update_parts import measure as update_parts
-from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.learn.devices import SeedMesh, select_devices
 from jaxbridge.learn.hyper import Hyper
@@ -134,7 +134,7 @@ def figures(setup: Setup, learner, metrics: list, ms: dict, tested, fill: int) -
 
 def profile(env: str, approaches: list[str], warmup: int, repeats: int, fill: int) -> dict:
     """Every approach's figures on `env` (seed 0), their parts timed in the same rounds."""
-    setups = {a: make_setup(TrainConfig.for_env(env, approach=a, num_seeds=1)) for a in approaches}
+    setups = {a: make_setup(jaxbridge.make_config(env, approach=a, num_seeds=1)) for a in approaches}
     seeds = {a: warm_up(setup, warmup) for a, setup in setups.items()}
     calls = {a: {**cycle_parts(setups[a], learner), "cycle_call": cycle} for a, (cycle, learner, _) in seeds.items()}
     ms = timed_rounds(calls, repeats)

@@ -12,6 +12,7 @@ it is measured, and --json is rewritten after each, so a run cut short keeps wha
 """
 from __future__ import annotations
 
+import jaxbridge
 import argparse
 import json
 from pathlib import Path
@@ -43,7 +44,6 @@ def main() -> None:
     from jaxbridge.learn.devices import describe, device_count_arg, select_devices
     devices = select_devices(device_count_arg(args.devices))  # before JAX starts
     import jax
-    from jaxbridge.core.config import TrainConfig
     from bench.timings.training import measure_cycles
 
     print(f"jax {jax.__version__}, {describe(devices)} device(s): {devices[0].device_kind}", flush=True)
@@ -55,7 +55,7 @@ def main() -> None:
     for num_seeds, block in ((n, b) for n in counts for b in blocks):
         per_device = -(-num_seeds // len(devices))
         block = per_device if block == "auto" else int(block)
-        config = TrainConfig.for_env(args.env, num_seeds=num_seeds, cycles=args.cycles, seed_block=block)
+        config = jaxbridge.make_config(args.env, num_seeds=num_seeds, cycles=args.cycles, seed_block=block)
         run = measure_cycles(config, devices)
         times = run["times"]
         steady = float(np.median(times[1:])) if len(times) > 1 else times[0]

@@ -20,6 +20,7 @@ is never cached anyway: it holds a host callback, see jaxbridge/utils/compile_ca
 """
 from __future__ import annotations
 
+import jaxbridge
 import argparse
 import datetime
 import json
@@ -53,7 +54,6 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
     from bench.timings.training import measure_cycles
     from bench.timings.updates import measure_updates
     from envs_jax import env_class
-    from jaxbridge.core.config import TrainConfig
 
     base = rss_mib()
     out = {"env": env, "devices": describe(devices), "rss_base_mib": round(base, 1)}
@@ -66,7 +66,7 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
                           "seconds": round(time.perf_counter() - start, 1)}
     out["rss_after_meta_policy_mib"] = round(rss_mib(), 1)
 
-    config = TrainConfig.for_env(env, num_seeds=8)
+    config = jaxbridge.make_config(env, num_seeds=8)
     run = measure_cycles(config, devices, cycles=cycles + 1)
     first, later = run["first"], run["later"]
     out["cycle"] = {"num_seeds": 8, "updates_per_cycle": config.updates_per_cycle, "batch_size": config.batch_size,

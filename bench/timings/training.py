@@ -9,6 +9,7 @@ Switch Door 17,572 s, Doorknobs 21,118 s; Coffee never finished, ~13,900 s of le
 """
 from __future__ import annotations
 
+import jaxbridge
 import argparse
 import dataclasses
 import time
@@ -128,7 +129,7 @@ def main() -> None:
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
     print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s), seed block {args.seed_block}")
-    configs = {approach: with_overrides(TrainConfig.for_env(args.env, num_seeds=args.num_seeds, cycles=args.cycles,
+    configs = {approach: with_overrides(jaxbridge.make_config(args.env, num_seeds=args.num_seeds, cycles=args.cycles,
                                                             seed_block=args.seed_block, approach=approach),
                                         args.overrides)[0] for approach in args.approach.split(",")}
     runs = measure_interleaved(configs, seeds_over, args.cycles)

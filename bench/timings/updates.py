@@ -9,6 +9,7 @@ the target relabelling that precedes them in a cycle.
 """
 from __future__ import annotations
 
+import jaxbridge
 import argparse
 import statistics
 import time
@@ -62,9 +63,8 @@ def main() -> None:
     from jaxbridge.learn.devices import describe, device_count_arg, select_devices
     devices = select_devices(device_count_arg(args.devices))
     from bench.timings.training import measure_cycles
-    from jaxbridge.core.config import TrainConfig
 
-    config = TrainConfig.for_env(args.env, num_seeds=args.num_seeds)
+    config = jaxbridge.make_config(args.env, num_seeds=args.num_seeds)
     run = measure_cycles(config, devices, cycles=2)
     r = measure_updates(run["setup"], run["seeds"], run["learners"], args.updates or config.updates_per_cycle,
                         args.repeats)

@@ -95,6 +95,11 @@ def _check_learner(config: TrainConfig, env_cls) -> None:
         learner_factory(config.learner.name)
 
 
+def default_test_protocol(env_cls) -> str:
+    """The test protocol a plain `train.py --env E` trains on, and `eval.py --env E --bridge B` evaluates."""
+    return presets.preset_values(presets.DEFAULT_PRESET, env_cls).get("test_protocol", TrainConfig.test_protocol)
+
+
 def preset_values(preset: str, env: EnvLike) -> dict:
     """{setting: value}: what `preset` (a key of PRESETS) sets on `env` before yours, `make_config`'s first
     layer over TrainConfig's defaults, with "preset" itself. InputError for an unknown preset or env."""

@@ -33,11 +33,18 @@ def load_env(env: EnvLike) -> type[NoveltyEnv]:
     return env_cls if is_builtin(env) else _checked(env_cls, env)
 
 
+_CHECKED: set[type[NoveltyEnv]] = set()  # plug-in env classes that passed check_env in this process
+
+
 def _checked(env_cls: type[NoveltyEnv], spec: str) -> type[NoveltyEnv]:
-    try:
-        return check_env(env_cls)
-    except EnvContractError as err:
-        raise InputError(f"env {spec} breaks the env contract: {err}") from None
+    """`env_cls` once check_env passed it; checked once per process (check_env traces: seconds)."""
+    if env_cls not in _CHECKED:
+        try:
+            check_env(env_cls)
+        except EnvContractError as err:
+            raise InputError(f"env {spec} breaks the env contract: {err}") from None
+        _CHECKED.add(env_cls)
+    return env_cls
 
 
 def env_name(env: EnvLike) -> str:

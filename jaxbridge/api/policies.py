@@ -7,10 +7,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from jaxbridge.api.config import default_test_protocol
 from jaxbridge.api.envs import EnvLike, check_test_protocol, load_env, seed_list, sized_tasks
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.episode import Controls
-from jaxbridge.core.presets import default_test_protocol
 from jaxbridge.core.tasks import TaskBatch
 from jaxbridge.run.evaluate import format_comparison, format_table, run_bridge, summarise
 from jaxbridge.utils.errors import InputError, refusing

@@ -168,14 +168,6 @@ class TrainConfig(Settings):
         return cls(**_typed(cls, data), learner=settings(**_typed(settings, learner)))
 
     @classmethod
-    def for_env(cls, env: str, preset: str = "jaxbridge", **overrides) -> "TrainConfig":
-        """The config for `env`: these defaults, then the preset's values for it (jaxbridge: the env's own
-        `train_defaults`, each documented there; jaxbridge/core/presets.py), then `overrides`."""
-        from envs_jax import env_class
-        from jaxbridge.core.presets import preset_values
-        return cls.over_preset(preset_values(preset, env_class(env)), env=env, **overrides)
-
-    @classmethod
     def over_preset(cls, values: dict, **given) -> "TrainConfig":
         """`given` over a preset's `values`. A preset's value for a setting the chosen learner lacks is left
         out (an env's double-DQN defaults do not apply to PQN); a given one is refused (ValueError). A
@@ -264,8 +256,8 @@ def _accepting_learner_names(cls: type) -> type:
 
 _accepting_learner_names(TrainConfig)
 TrainConfig.__doc__ = (
-    "A training run's settings (frozen): `TrainConfig.for_env(env, preset, **overrides)` resolves an env's and a "
-    "preset's values.\nEach field, its default, and where the paper or the authors' code differ ([leaf]: a sweep "
+    "A training run's settings (frozen): `jaxbridge.make_config(env, preset=..., **overrides)` resolves an env's "
+    "and a preset's values, checked.\nEach field, its default, and where the paper or the authors' code differ ([leaf]: a sweep "
     "over it shares one compiled program):\n\n" + described(TrainConfig, skip=("learner",))
     + "\n\nlearner: the learner's settings, `config.learner`; double DQN's by default (PQN's: "
     "help(jaxbridge.core.learner_settings.PQNSettings)):\n\n" + described(DQNSettings))

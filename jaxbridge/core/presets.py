@@ -66,8 +66,3 @@ def preset_learner(preset: str | None) -> str | None:
     """The learner `preset` chooses, if it chooses one (pqn: PQN)."""
     return {"authors": AUTHORS, "pqn": PQN}.get(preset, {}).get("learner")
 
-
-def default_test_protocol(env_cls) -> str:
-    """The test protocol a plain `train.py --env E` trains on, and `eval.py --env E --bridge B` evaluates."""
-    from jaxbridge.core.config import TrainConfig
-    return preset_values(DEFAULT_PRESET, env_cls).get("test_protocol", TrainConfig.test_protocol)

@@ -3,10 +3,10 @@ of ours, 1 seed, 2 cycles, stopped before cycle 2 (its checkpoint of cycle 1 and
 
     python tests/data/make_v11_run.py tests/data/v11_run   # in a checkout of cd8db1a
 """
+import jaxbridge
 import sys
 from pathlib import Path
 
-from jaxbridge import TrainConfig
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run import rundir
 from jaxbridge.run.hooks import RunHooks
@@ -24,7 +24,7 @@ def stop(cycle, learners):
 
 
 out = Path(sys.argv[1])
-config = TrainConfig.for_env("light_switch_door", num_seeds=1, cycles=2, episodes_per_cycle=2, num_test_tasks=2,
+config = jaxbridge.make_config("light_switch_door", num_seeds=1, cycles=2, episodes_per_cycle=2, num_test_tasks=2,
                              updates_per_cycle=10, buffer_capacity=256, checkpoint_every=1)
 rundir.prepare(out, overwrite=False)
 try:
