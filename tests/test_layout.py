@@ -224,3 +224,10 @@ def test_only_the_listed_micro_benchmarks_import_below_the_public_api():
              for path in sorted((ROOT / "bench").rglob("*.py")) if (below := below_the_api(path))}
     assert set(found) <= set(BENCH_INSIDE), {name: found[name] for name in set(found) - set(BENCH_INSIDE)}
     assert set(BENCH_INSIDE) <= set(found), f"these no longer reach inside: strike them off BENCH_INSIDE: {set(BENCH_INSIDE) - set(found)}"
+
+
+def test_the_settings_and_the_presets_import_nothing_of_each_other():
+    """A preset is values for the settings; what combines them is the API's make_config (api/config.py)."""
+    config, presets = ROOT / "jaxbridge" / "core" / "config.py", ROOT / "jaxbridge" / "core" / "presets.py"
+    assert not any(name.startswith("jaxbridge.core.presets") for name in imported(config))
+    assert not any(name.startswith("jaxbridge.core.config") for name in imported(presets))
