@@ -12,7 +12,7 @@ import heapq
 import itertools
 from dataclasses import dataclass
 
-from planner.search import BitOperator, _by_lowest_precondition, successors
+from planner.search import BitOperator, by_lowest_precondition, successors
 
 
 def _bits(mask: int):
@@ -127,7 +127,7 @@ def astar(ops: list[BitOperator], goal: int, root: int, heuristic=h_ff) -> Searc
     reached more cheaply, so h_max (admissible) gives optimal-length plans; states the heuristic calls
     dead ends (None: the relaxed goal is unreachable, so the real one is) are never queued."""
     evaluate = _evaluator(heuristic, ops, goal)
-    always, keyed = _by_lowest_precondition(ops)
+    always, keyed = by_lowest_precondition(ops)
     h_root = evaluate(root)
     if h_root is None:
         return SearchResult(None, 0, 0)

@@ -43,7 +43,7 @@ def successors(ops: list[BitOperator], state: int, candidates: list[int]) -> lis
     return out
 
 
-def _by_lowest_precondition(ops: list[BitOperator]) -> tuple[list[int], dict[int, list[int]]]:
+def by_lowest_precondition(ops: list[BitOperator]) -> tuple[list[int], dict[int, list[int]]]:
     """Operators without preconditions, and the others keyed by their lowest precondition bit: an
     operator can only apply in a state holding that bit (most states hold few of the model's atoms)."""
     always, keyed = [], {}
@@ -57,7 +57,7 @@ def _by_lowest_precondition(ops: list[BitOperator]) -> tuple[list[int], dict[int
 
 def reachable(ops: list[BitOperator], root: int) -> dict[int, list[tuple[int, int]]]:
     """Every state reachable from `root` (in breadth-first order) with its outgoing edges."""
-    always, keyed = _by_lowest_precondition(ops)
+    always, keyed = by_lowest_precondition(ops)
     graph: dict[int, list[tuple[int, int]]] = {}
     queue = deque([root])
     while queue:
