@@ -37,7 +37,7 @@ def row(module: str, path: Path) -> str:
 
 
 def main(argv=None) -> int:
-    if argv if argv is not None else sys.argv[1:]:
+    if sys.argv[1:] if argv is None else argv:
         print("python -m bench takes no arguments: it lists the bench commands (each has --help)", file=sys.stderr)
         return 2
     print("\n".join(listing()))

@@ -44,7 +44,7 @@ RENAMED = {
         "bridge_steps", "decisions", "knob_offsets", "stuck_objects", "sweep", "low_level", "departures")},
     "render": "pages.render", "results_blocks": "pages.results", "claims": "pages.claims",
     "performance_blocks": "pages.performance", "fix_length_page": "pages.fix_length",
-    "multi_novelty_page": "pages.multi_novelty", "selection_history": "pages.selection_history", "report": "pages.report",
+    "multi_novelty_page": "pages.multi_novelty", "report": "pages.report",
 }
 
 

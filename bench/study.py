@@ -112,7 +112,9 @@ class Study:
         try:
             args.seed_list = seed_list(args.seeds)
         except ValueError:
-            parser.error(f"--seeds takes FIRST-LAST, got {args.seeds!r}")
+            args.seed_list = []
+        if not args.seed_list:
+            parser.error(f"--seeds takes FIRST-LAST with FIRST <= LAST, got {args.seeds!r}")
         args.on_test_seeds = on_test_seeds(args.seed_list)
         args.command = command_line(parser, args, self.module)
         self.check(parser, args)

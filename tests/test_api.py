@@ -111,7 +111,9 @@ def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_and_draw
     draw = LightSwitchDoor.train_tasks.__func__
     monkeypatch.setattr(LightSwitchDoor, "train_tasks", classmethod(counting(lambda cls, seed, _: seed, draw)))
     tasks._drawn_train_tasks.cache_clear()  # earlier tests of this process drew these seeds too
-    monkeypatch.setattr(Cycle, "__call__", lambda self, learners: (_ for _ in ()).throw(FirstCycle()))
+    def first_cycle(self, learners):
+        raise FirstCycle()
+    monkeypatch.setattr(Cycle, "__call__", first_cycle)
     with pytest.raises(FirstCycle):
         train.main(["--env", "light_switch_door", "--approaches", "ours,random,no_callplanner", "--num-seeds", "2",
                     "--first-seed", "3", "--cycles", "1", "--workers", "1", "--no-progress", "--out", str(tmp_path)])

@@ -143,6 +143,10 @@ def test_a_study_on_development_or_test_seeds_writes_a_row_only_for_a_test_set(o
     begin = lambda *flags: multi_novelty.STUDY.begin(multi_novelty.STUDY.parse(list(flags)))
     begin("--seeds", "0-7")
     assert not own_ledger.exists()
+    for bad in ("7-3", "seven"):  # refused as a flag error, before anything begins
+        with pytest.raises(SystemExit) as refused:
+            begin("--seeds", bad)
+        assert refused.value.code == 2 and "--seeds takes FIRST-LAST" in capsys.readouterr().err
     for flags, message in ((("--seeds", "300-301"), "needs --change and --chosen-on"),
                            (("--seeds", "330-333", *REASON), "not within a test-seed set")):
         with pytest.raises(SystemExit) as refused:

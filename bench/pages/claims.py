@@ -75,9 +75,9 @@ def above(rows: dict[int, dict], others: dict[str, dict[int, dict]], cycles: tup
 def stuck(rows: dict[int, dict], ablation: dict[int, dict], name: str, cycle: int) -> Outcome:
     """Ours above the ablation at `cycle`, and the ablation low: at most STUCK_FRACTION of ours' mean."""
     beaten = above(rows, {name: ablation}, (cycle,))
-    low = interval(ablation, cycle)[0] <= STUCK_FRACTION * interval(rows, cycle)[0]
-    ratio = interval(ablation, cycle)[0] / max(interval(rows, cycle)[0], 1e-9)
-    return Outcome(f"{beaten.text}; the ablation's mean {ratio:.2f}x ours'", beaten.holds and low,
+    theirs, ours = interval(ablation, cycle)[0], interval(rows, cycle)[0]
+    low = theirs <= STUCK_FRACTION * ours
+    return Outcome(f"{beaten.text}; the ablation's mean {theirs / max(ours, 1e-9):.2f}x ours'", beaten.holds and low,
                    partly=beaten.holds and not low)
 
 

@@ -16,10 +16,11 @@ import sys
 
 from bench.records import ENVS, DISTRACTOR_ENVS, RECORDS, ROOT, _git
 from bench.pages.results import by_approach, seed_values
+from bench.study import csv_text
 from jaxbridge.utils import stats
+from jaxbridge.utils.files import write_atomic
 
 HISTORY = RECORDS / "selection_history.csv"
-FIELDS = ("landed", "env", "seeds", "trained_at", "ratio", "low", "high")
 
 
 def at(commit: str, path: str) -> str:
@@ -60,11 +61,7 @@ def main(argv=None) -> int:
     if not rows:
         print("bench.pages.selection_history: git holds no selection record here (a clone without history?)", file=sys.stderr)
         return 2
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=FIELDS, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    HISTORY.write_text(text.getvalue())  # written whole, once every row is read
+    write_atomic(HISTORY, csv_text(rows))  # written whole, once every row is read
     print(f"bench.pages.selection_history: {len(rows)} records -> {HISTORY.relative_to(ROOT)}")
     return 0
 
