@@ -5,7 +5,7 @@ types, `register` and `env_class` (names, envs_jax/registry.py), `envs_jax.drawi
 `jaxbridge.check_env` checks an env against the contract; docs/NEW_ENV.md walks through writing one.
 """
 from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, BridgeAction, BridgeObs, NoveltyEnv,
-                           NoveltySweep, Objects, SkillCall, SkillSpec, TaskSpec)
+                           NoveltySweep, Objects, SkillCall, SkillSpec, TaskSpec, named_slots)
 from envs_jax.coffee import Coffee, CoffeeDistractor
 from envs_jax.doorknobs import Doorknobs, DoorknobsDistractor
 from envs_jax.light_switch_door import LightSwitchDoor, LightSwitchPanel
@@ -22,4 +22,4 @@ for _cls in (LightSwitchDoor, Doorknobs, Coffee, LightSwitchPanel, CoffeeDistrac
 __all__ = ["BUILTIN", "KNOBS", "VARIANTS", "WORLDS", "ACTOR_BRIDGE", "ACTOR_CALL_PLANNER", "ACTOR_PLANNER", "BridgeAction", "BridgeObs", "NoveltyEnv",
            "NoveltySweep", "Objects", "SkillCall", "SkillSpec", "TaskSpec", "LightSwitchDoor", "Doorknobs", "Coffee", "LightSwitchPanel",
            "CoffeeDistractor", "DoorknobsDistractor", "LightSwitchSequence", "MultiNovelty",
-           "env_class", "is_builtin", "register", "registered"]
+           "env_class", "is_builtin", "named_slots", "register", "registered"]

@@ -106,6 +106,12 @@ class NoveltySweep:
     horizon: Callable[[Any], int]  # the spec's horizon, by the env's rule
 
 
+def named_slots(names, capacity: int) -> tuple[str | None, ...]:
+    """`names` in the first slots of a type's `capacity`, None in the rest (`object_names`' padding)."""
+    names = tuple(names)
+    return names + (None,) * (capacity - len(names))
+
+
 def idle_call() -> SkillCall:
     return SkillCall(skill=jnp.int32(0), slot=jnp.int32(0), param=jnp.float32(0.0),
                      running=jnp.bool_(False), steps=jnp.int32(0))
@@ -283,6 +289,13 @@ class NoveltyEnv(abc.ABC):
         """The state as objects: N slots, each with its type, features, mask, interactability, position.
         A feature says what an object is (a key's turn, a cup's liquid); where it is, is its position."""
         raise NotImplementedError(f"{type(self).__name__} has no object view (object_types, objects)")
+
+    def object_names(self, spec: TaskSpec) -> tuple[str | None, ...]:
+        """The planner object each object-view slot is in the task `spec` (N entries, slot order): a name of
+        `planner_problem(spec).objects` of the slot's type, a new name for an object the planner's model
+        leaves out (a novelty's doors, cards, closets), None for a slot the task does not fill. A model
+        learner reads states through it (`check_env` checks names, types and masks agree)."""
+        raise NotImplementedError(f"{type(self).__name__} names no planner objects for its object view (object_names)")
 
     @property
     def candidate_slots(self) -> np.ndarray:

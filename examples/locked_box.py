@@ -186,6 +186,9 @@ class LockedBox(NoveltyEnv):
                               Objects.of_type(1, at(state.holding), True, True, at(key_x), 1),
                               Objects.of_type(2, at(state.box_open), True, True, at(box_x), 1))
 
+    def object_names(self, spec: LockedBoxTask) -> tuple[str | None, ...]:
+        return ("robby", "key", "box")  # the key and the box: the novelty's, unknown to the planner's model
+
     def oracle_object(self, state: State) -> jax.Array:
         return jnp.where(state.holding, 2, 1).astype(jnp.int32)  # the key until it is held, then the box
 

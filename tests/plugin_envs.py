@@ -73,6 +73,13 @@ class LeakyObjects(LockedBox):
         return objects.replace(mask=objects.mask.at[2].set(False))
 
 
+class MisnamedKey(LockedBox):
+    """The key is named after a planner object of another type (a cell)."""
+
+    def object_names(self, spec):
+        return ("robby", "cell0", "box")
+
+
 class HiddenCandidate(LockedBox):
     """The box can be acted on, but its slot is left out of candidate_slots (a learned selector's tokens)."""
 

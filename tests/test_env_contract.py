@@ -35,6 +35,8 @@ def test_the_example_env_keeps_the_contract_and_its_oracle_solves_its_tasks():
     (plugin_envs.ClumsyOracle, "ClumsyOracle.oracle_bridge: expected every test task of seed 0 solved"),
     (plugin_envs.LeakyObjects, "LeakyObjects.objects: expected every masked-out slot zero and not interactable"),
     (plugin_envs.HiddenCandidate, "HiddenCandidate.objects: expected no slot outside candidate_slots interactable, got slots [2]"),
+    (plugin_envs.MisnamedKey, "MisnamedKey.object_names: expected the planner's type of every planner object it names, "
+                              "got ('cell0', 'cell', 'key')"),
 ])
 def test_check_env_names_the_broken_method_and_what_it_expected(broken, message):
     with pytest.raises(EnvContractError) as caught:

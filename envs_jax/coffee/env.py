@@ -29,7 +29,7 @@ import numpy as np
 
 from envs_jax.coffee import skills
 from envs_jax.coffee import world
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
 from envs_jax.coffee.world import MAX_CUPS, CoffeeTask, State, Task
 from planner.strips import Domain, LiftedOperator, Problem
 
@@ -208,6 +208,9 @@ class Coffee(NoveltyEnv):
             Objects.of_type(1, jug[None], True, True, state.jug_xy[None], width),
             Objects.of_type(2, flag(state.machine_on).reshape(1, 1), True, True, jnp.asarray(world.DISPENSE[None, :2]), width),
             Objects.of_type(3, cups, task.cup_mask, True, task.cup_xy, width))
+
+    def object_names(self, spec: CoffeeTask) -> tuple[str | None, ...]:
+        return (ROBOT, JUG, MACHINE, *named_slots((f"cup{i}" for i in range(len(spec.cups))), self.max_cups))
 
     def oracle_object(self, state: State) -> jax.Array:
         """The jug (slot 1): the novelty is its rotation."""

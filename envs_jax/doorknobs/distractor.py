@@ -99,6 +99,11 @@ class DoorknobsDistractor(Doorknobs):
         doors = super().candidate_slots
         return np.r_[doors, doors + 2 * self._rooms]
 
+    def object_names(self, spec: DoorknobsTask) -> tuple[str | None, ...]:
+        names, doors = super().object_names(spec), slice(1 + self._rooms, 1 + 3 * self._rooms)
+        closets = self.task_arrays(spec).closet_mask
+        return names + tuple(f"closet-{door}" if door and has else None for door, has in zip(names[doors], closets))
+
     def objects(self, state: State) -> Objects:
         task = state.task
         features = jnp.broadcast_to(jnp.asarray(CLOSET_FEATURES), task.closet_knob.shape[:1] + (3,))

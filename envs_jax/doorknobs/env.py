@@ -22,7 +22,7 @@ from flax import struct
 
 from envs_jax import geometry
 from envs_jax.doorknobs import maps, motion
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
 from envs_jax.doorknobs.maps import (
     ACTION_MAGNITUDE,
     BOTTOM,
@@ -278,6 +278,15 @@ class Doorknobs(NoveltyEnv):
 
     def state_vector(self, state: State) -> jax.Array:
         return jnp.concatenate([state.robot, state.knob_rot, state.door_open.astype(jnp.float32)])
+
+    def object_names(self, spec: DoorknobsTask) -> tuple[str | None, ...]:
+        # the robot, then R room slots and 2R door slots, each at its object_slot
+        first = {"room": 1, "door": 1 + self._rooms}
+        names: list[str | None] = ["robby"] + [None] * (3 * self._rooms)
+        for name, kind in self.planner_problem(spec).objects.items():
+            if kind in first:
+                names[first[kind] + self.object_slot(name)] = name
+        return tuple(names)
 
     def oracle_object(self, state: State) -> jax.Array:  # the door of the knob `features` shows
         doors, candidates, _, _, k = self._room_knobs(state)

@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
 from envs_jax.precision import ExactKey, ExactWindow, exact_window
 from planner.strips import Domain, LiftedOperator, Problem
 
@@ -359,6 +359,11 @@ class LightSwitchDoor(NoveltyEnv):
             Objects.of_type(2, nothing(self.max_cells), jnp.arange(self.max_cells) < task.num_cells, False,
                             at(self._cell_centres()), width),
             Objects.of_type(3, doors, task.door_cell >= 0, True, at(task.keys_cell + 0.5), width))
+
+    def object_names(self, spec: LightSwitchDoorTask) -> tuple[str | None, ...]:
+        # the planner's robot, light and cells; the doors are the novelty's, unknown to its model
+        return ("robby", "light", *named_slots((f"cell{i}" for i in range(spec.num_cells)), self.max_cells),
+                *named_slots((f"door{j}" for j in range(len(spec.door_cells))), self.max_doors))
 
     def oracle_object(self, state: State) -> jax.Array:
         """The door whose keys turn in the robot's cell."""

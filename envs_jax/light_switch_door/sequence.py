@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.base import BridgeAction, NoveltySweep, Objects, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
 from envs_jax.light_switch_door import env as lsd
 from envs_jax.light_switch_door.env import LightSwitchDoor
 from planner.strips import Domain, LiftedOperator, Problem
@@ -288,6 +288,10 @@ class LightSwitchSequence(LightSwitchDoor):
         return 2 + self.max_cells + 1
 
     candidate_slots = property(lambda self: np.array([1, 2 + self.max_cells]))  # the light, the door
+
+    def object_names(self, spec: LightSwitchSequenceTask) -> tuple[str | None, ...]:
+        cells = (f"cell{i}" for i in range(spec.num_cells))
+        return ("robby", "light", *named_slots(cells, self.max_cells), "door")  # the row's one door
 
     def objects(self, state: State) -> Objects:
         task, width, at = state.task, self.object_width, lambda x: jnp.asarray(x, jnp.float32).reshape(-1, 1)

@@ -29,7 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec
+from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
 from envs_jax.multi_novelty import tasks
 from envs_jax.multi_novelty.tasks import KEYCARD, LATCHED, MultiNoveltyTask
 from planner.strips import Domain, LiftedOperator, Problem
@@ -320,6 +320,13 @@ class MultiNovelty(NoveltyEnv):
                             at(jnp.arange(self.max_cells) + 0.5), width),
             Objects.of_type(3, self._door_rows(state), task.door_cell >= 0, self._closed(state), at(task.door_cell + 0.5), width),
             Objects.of_type(4, at(state.card_held), task.keycard, ~state.card_held, at(task.key_cell + 0.5), width))
+
+    def object_names(self, spec: MultiNoveltyTask) -> tuple[str | None, ...]:
+        # the planner's names (its problem lists the doors and cards the novelties' skills act on)
+        doors = range(len(spec.door_cells))
+        keys = (f"key{j}" if spec.locks[j] & KEYCARD else None for j in doors)
+        return ("robby", "light", *named_slots((f"cell{i}" for i in range(spec.num_cells)), self.max_cells),
+                *named_slots((f"door{j}" for j in doors), self.max_doors), *named_slots(keys, self.max_doors))
 
     def oracle_object(self, state: State) -> jax.Array:
         """At a closed door: its card while the robot lacks it, else the door (its latch); at the light

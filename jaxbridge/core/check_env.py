@@ -44,6 +44,9 @@ def check_env(env_or_class: NoveltyEnv | type[NoveltyEnv], seed: int = 0, num_te
     for spec in (train_spec, *test_specs):
         _check_planner(env, spec)
     _check_device(env, [env.task_arrays(s) for s in (train_spec, *test_specs[:1])])
+    if cls.object_types:
+        for spec in (train_spec, *test_specs):
+            _check_object_names(env, spec)
     _check_filled(cls, train_spec, seed)
     if oracle and env.has_oracle:
         _check_oracle(cls, seed, num_test_tasks)
@@ -222,6 +225,25 @@ def _check_objects(env: NoveltyEnv, states: Any) -> None:
         f"{type(env).__name__}.oracle_object", jax.jit(jax.vmap(env.oracle_object)), states), jnp.int32, batch))
     _expect(((acted_on == -1) | ((acted_on >= 0) & (acted_on < n))).all(), f"{type(env).__name__}.oracle_object",
             f"a slot in 0..{n - 1} or -1", acted_on)
+
+
+def _check_object_names(env: NoveltyEnv, spec: Any) -> None:
+    """`object_names`: one entry per slot, a unique name exactly for the slots the task fills, and a name
+    the planner's problem holds only for an object of the slot's type."""
+    where, types = f"{type(env).__name__}.object_names", list(type(env).object_types)
+    names = _calls(where, env.object_names, spec)
+    view = jax.tree.map(np.asarray, jax.jit(env.objects)(env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec)))))
+    _expect(isinstance(names, tuple) and len(names) == env.num_objects, where, f"a tuple of num_objects = {env.num_objects}",
+            f"{type(names).__name__} of {len(names) if hasattr(names, '__len__') else '?'}")
+    named = np.array([name is not None for name in names])
+    _expect(np.array_equal(named, view.mask), where, "a name for exactly the slots objects() masks in",
+            f"names at {np.flatnonzero(named).tolist()}, mask at {np.flatnonzero(view.mask).tolist()}")
+    given = [name for name in names if name is not None]
+    _expect(len(set(given)) == len(given) and all(isinstance(n, str) for n in given), where, "unique str names", given)
+    planner_objects = env.planner_problem(spec).objects
+    wrong = [(name, planner_objects[name], types[t]) for name, t in zip(names, view.type_id)
+             if name in planner_objects and planner_objects[name] != types[t]]
+    _expect(not wrong, where, "the planner's type of every planner object it names", wrong[0] if wrong else None)
 
 
 def _shape(where: str, value: Any, dtype, shape: tuple | None = None) -> jax.Array:
