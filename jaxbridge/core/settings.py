@@ -4,21 +4,21 @@
 leaf (a numeric hyperparameter that changes no shape or program, handed to the cycle as a pytree leaf,
 learn/hyper.Hyper, so that one compiled program trains every value of a sweep), its range, the enum its
 text resolves to, and whether `--sweep` may vary it. The help text is the docstring written under the
-field (`field_docs`). Everything that checks, parses, sweeps or explains a setting reads these, so a
-field is declared in one place: TrainConfig's own (core/config.py) and each learner's settings class.
+field (`field_docs`, utils/cli.py). Everything that checks, parses, sweeps or explains a setting, and
+train.py's flags (utils/cli.add_field_flags), reads these, so a field is declared in one place:
+TrainConfig's own (core/config.py) and each learner's settings class.
 A learner's factory gets its settings with every leaf a `LeafSetting` (`leaves_hidden`), which refuses to
 be a number: the learner reads a leaf from `hyper`, the one place a sweep gives each setting its value.
 """
 from __future__ import annotations
 
-import ast
 import dataclasses
 import enum
-import functools
-import inspect
 import textwrap
 import typing
 from dataclasses import dataclass
+
+from jaxbridge.utils.cli import field_docs
 
 
 def setting(default, *, leaf: bool = False, low=None, high=None, above: bool = False, choices: type[enum.Enum] | None = None,
@@ -143,20 +143,6 @@ def parse_value(cls: type, name: str, text: str):
         return text
     except ValueError:
         raise ValueError(f"{name}: expected {expected.get(kind, 'a value')}, got {text!r}") from None
-
-
-@functools.cache
-def field_docs(cls: type) -> dict[str, str]:
-    """{field: the docstring written under it in the source} for `cls` and the settings classes it extends
-    (Python keeps attribute docstrings only in the source)."""
-    docs = {}
-    for klass in reversed(cls.__mro__):
-        if not (dataclasses.is_dataclass(klass) and klass.__dict__.get("__annotations__")):
-            continue
-        body = ast.parse(textwrap.dedent(inspect.getsource(klass))).body[0].body
-        docs.update({a.target.id: inspect.cleandoc(b.value.value) for a, b in zip(body, body[1:])
-                     if isinstance(a, ast.AnnAssign) and isinstance(b, ast.Expr) and isinstance(b.value, ast.Constant)})
-    return docs
 
 
 def shown(value) -> str:
