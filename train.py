@@ -24,6 +24,7 @@ See docs/PERFORMANCE.md.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -31,16 +32,16 @@ from pathlib import Path
 
 import jaxbridge
 from jaxbridge.utils import compile_cache, distributed
-from jaxbridge.utils.cli import (ArgumentParser, auto_or_positive_int, names_from, non_negative_int, positive_float,
-                                 positive_int, positive_int_list, run_main)
+from jaxbridge.utils.cli import (ArgumentParser, add_field_flags, auto_or_positive_int, names_from, positive_float,
+                                 positive_int, run_main)
 from jaxbridge.utils.interrupts import EXIT_INTERRUPTED, Interrupts, run_watched
 
 EXIT_NUMERICAL, EXIT_CANNOT_WRITE = 3, 4
-# Flags that set the run's config (flag name = TrainConfig field); --resume takes the saved config.
-CONFIG_FLAGS = ("env", "preset", "env_quirks", "test_protocol", "learner", "num_seeds", "first_seed", "cycles",
-                "episodes_per_cycle", "train_steps", "updates_per_cycle", "batch_size", "call_planner_bonus",
-                "checkpoint_every", "keep_cycles", "seed_block", "low_level_budget")
 DEFAULTS = jaxbridge.TrainConfig()
+# The default learner's settings that have a flag of their own; the others, and other learners': --set.
+LEARNER_FLAGS = ("updates_per_cycle", "batch_size")
+# The flags that set the run's config, named as their settings; --resume takes the saved config instead.
+SETTINGS = {field.name for field in dataclasses.fields(jaxbridge.TrainConfig)} | set(LEARNER_FLAGS)
 
 
 def chosen_learner(argv) -> tuple[str | None, str | None]:
@@ -55,55 +56,15 @@ def chosen_learner(argv) -> tuple[str | None, str | None]:
 def parse_args(argv):
     p = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
                        epilog=jaxbridge.settings_help(*chosen_learner(argv)))
-    d = DEFAULTS
-    p.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(jaxbridge.env_names())}, or package.module:Class "
-                                              f"for an env of your own (checked first; docs/NEW_ENV.md) (default: {d.env})")
-    p.add_argument("--preset", choices=list(jaxbridge.PRESETS), default=None,
-                   help="the values a run starts from: " + "; ".join(f"{k}: {v}" for k, v in jaxbridge.PRESETS.items())
-                        + " (flags below override it; config.json records every resolved value) (default: jaxbridge)")
-    p.add_argument("--env-quirks", metavar="NAME[,NAME]", type=lambda t: tuple(n for n in t.split(",") if n and n != "none"),
-                   help="behaviours of the authors' envs to switch back on (the env's quirks, e.g. Coffee's "
-                        "shared_repeat_flag, Doorknobs' raw_offsets), or none (default: the preset's)")
-    p.add_argument("--test-protocol", metavar="NAME",
-                   help="which of the env's test-task distributions to evaluate on, e.g. authors: Coffee's 4 cups "
-                        "with horizon 100, Light Switch Door's fixed horizon 30 (default: the preset's, else the "
-                        "env's first)")
     p.add_argument("--approaches", type=names_from(jaxbridge.ALL_APPROACHES, "approach"), default=None, metavar="LIST",
                    help="comma-separated approaches to train, or all (the six and what the env's default adds; default: "
                         f"the paper's figure for the env: the six, {', '.join(jaxbridge.APPROACHES)}; doorknobs: all but "
                         "no_feature_selection, as the paper's Doorknobs figure; multi_novelty: ours, the learned selector, the "
                         "per-signature bridges and the baselines but Maple Q; by name only: "
                         f"{', '.join([*jaxbridge.SELECTION, *jaxbridge.SIGNATURE, *jaxbridge.PLAN_REPAIR, *jaxbridge.LOW_LEVEL])})")
-    p.add_argument("--learner", metavar="NAME", help="what fits the Q-function: dqn (double DQN, the paper's), pqn (no "
-                   "replay or target network) or package.module:factory (checked first; docs/NEW_LEARNER.md); "
-                   f"--help --learner NAME lists its settings below (default: {d.learner.name})")
     p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
                    help="set a setting of the run or of its learner by name (listed below), e.g. --set batch_size=64 "
                         "--set hidden_sizes=64x64; repeat for more (default: the preset's values)")
-    p.add_argument("--num-seeds", type=positive_int,
-                   help=f"seeds trained together, each with its own tasks and network (default: {d.num_seeds})")
-    p.add_argument("--first-seed", type=non_negative_int,
-                   help=f"seeds are first-seed .. first-seed+num-seeds-1 (default: {d.first_seed})")
-    p.add_argument("--cycles", type=positive_int, help=f"online learning cycles (default: {d.cycles}, the paper's)")
-    p.add_argument("--episodes-per-cycle", type=positive_int,
-                   help=f"training episodes per cycle (default: {d.episodes_per_cycle}, the paper's)")
-    p.add_argument("--train-steps", type=positive_int,
-                   help=f"env steps per training episode at most, the training horizon (default: {d.train_steps}, "
-                        "the paper's); it must leave room to reach every seed's training goal")
-    p.add_argument("--updates-per-cycle", type=non_negative_int,
-                   help=f"double-DQN minibatch updates per cycle (default: {d.updates_per_cycle})")
-    p.add_argument("--batch-size", type=positive_int,
-                   help=f"minibatch size of the updates (default: {d.batch_size}; the paper: 64)")
-    p.add_argument("--call-planner-bonus", type=float,
-                   help=f"extra reward when CallPlanner reaches the goal (the authors' code: 0.5; default: "
-                        f"{d.call_planner_bonus}, doorknobs 0.5; see docs/TUNING.md)")
-    p.add_argument("--low-level-budget", type=positive_int, help="the low-level baselines' agent steps per cycle, in "
-                   f"units of ours' env steps per cycle: 1 is the paper's budget (default: {d.low_level_budget})")
-    p.add_argument("--checkpoint-every", type=positive_int,
-                   help=f"save the learner state every N cycles and at the end (default: {d.checkpoint_every})")
-    p.add_argument("--keep-cycles", type=positive_int_list, metavar="N[,N]",
-                   help="also save the learner state after these cycles and keep it, besides the latest two "
-                        "checkpoints, for eval.py --cycle N (default: none)")
     p.add_argument("--sweep", action="append", default=None, metavar="KEY=V1,V2,...",
                    help="train every approach at each of these values of a hyperparameter (repeat for a grid: "
                         "the cartesian product), each setting its own run directory approach@KEY=V,... with a row "
@@ -125,10 +86,6 @@ def parse_args(argv):
                         "virtual CPU device per core (set before JAX starts; XLA_FLAGS="
                         "--xla_force_host_platform_device_count=K takes precedence). Seeds need not divide evenly. "
                         "Results do not depend on it (default: %(default)s)")
-    p.add_argument("--seed-block", type=positive_int,
-                   help="seeds computed side by side (vmapped) on each device, for GPUs; 1 runs them one after another, "
-                        "so each seed's numbers depend on no other seed (on 2 CPU cores as fast as blocks; "
-                        f"docs/PERFORMANCE.md). Results depend on the block, not on --devices (default: {d.seed_block})")
     p.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
                    help="refuse a run whose memory estimate (learner states, replay buffers, tasks and plan tables) "
                         "exceeds this many GiB (default: the memory available when it starts)")
@@ -140,8 +97,34 @@ def parse_args(argv):
                         "training solve rates, the loss, epsilon, buffer size, and the config as text "
                         "(tensorboard --logdir RUN); metrics.csv stays the source of truth (default: off)")
     p.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
+    add_setting_flags(p)
     distributed.add_flags(p)
     return p.parse_args(argv)
+
+
+def add_setting_flags(p) -> None:
+    """A flag per setting, made from its declaration (jaxbridge.TrainConfig's fields and LEARNER_FLAGS).
+    --env, --preset and --learner are written here: each names what resolves the other settings' values
+    (a registered env or a class, a preset, a learner's settings class), which their help lists."""
+    d, run = DEFAULTS, p.add_argument_group("settings of the run", "  each sets the TrainConfig field of its name "
+                                           "(help(jaxbridge.TrainConfig));\n  one not given takes the preset's value "
+                                           "for the env, else the default shown")
+    run.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(jaxbridge.env_names())}, or package.module:"
+                     f"Class for an env of your own (checked first; docs/NEW_ENV.md) (default: {d.env})")
+    run.add_argument("--preset", choices=list(jaxbridge.PRESETS), default=None,
+                     help="the values a run starts from: " + "; ".join(f"{k}: {v}" for k, v in jaxbridge.PRESETS.items())
+                          + " (flags below override it; config.json records every resolved value) (default: jaxbridge)")
+    run.add_argument("--learner", metavar="NAME", help="what fits the Q-function: dqn (double DQN, the paper's), pqn (no "
+                     "replay or target network) or package.module:factory (checked first; docs/NEW_LEARNER.md); "
+                     f"--help --learner NAME lists its settings below (default: {d.learner.name})")
+    add_field_flags(run, jaxbridge.TrainConfig, skip=("env", "preset", "learner", "approach"))  # approach: --approaches
+    add_field_flags(p.add_argument_group(f"settings of learner {d.learner.name} with flags (the others, and other "
+                                         "learners': --set, listed below)"), type(d.learner), only=LEARNER_FLAGS)
+
+
+def given_settings(args) -> dict:
+    """{setting: value} of the setting flags given (one not given is left to the preset and the defaults)."""
+    return {name: value for name, value in vars(args).items() if name in SETTINGS and value is not None}
 
 
 def main(argv=None) -> int:
@@ -149,11 +132,11 @@ def main(argv=None) -> int:
     distributed.initialize_from(args)  # before anything starts JAX
     devices = jaxbridge.local_devices(args.devices)
     compile_cache.enable(not args.no_compile_cache)  # before anything compiles
-    start, given = time.perf_counter(), {flag: getattr(args, flag) for flag in CONFIG_FLAGS}
+    start, given = time.perf_counter(), given_settings(args)
     interrupts = Interrupts(on_exit=jaxbridge.release_locks)
     options = dict(workers=args.workers, devices=devices, progress=not args.no_progress, tensorboard=args.tensorboard)
     if args.resume is not None:
-        clashing = [f"--{flag.replace('_', '-')}" for flag, value in given.items() if value is not None]
+        clashing = [f"--{flag.replace('_', '-')}" for flag in given]
         clashing += [f"--{flag}" for flag in ("overwrite", "name", "approaches", "sweep", "set") if getattr(args, flag)]
         if clashing:
             raise jaxbridge.InputError(f"--resume continues a run with its saved config; drop {', '.join(clashing)}")

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import dataclasses
-import textwrap
 from typing import Sequence
 
 from jaxbridge.api.envs import EnvLike, check_test_protocol, env_name, load_env, seed_list
@@ -58,9 +57,9 @@ def setting_values(texts: Sequence[str], config: TrainConfig) -> dict:
 
 
 def settings_help(learner: str | None = None, preset: str | None = None) -> str:
-    """What train.py --help lists under its flags: the settings of `learner` (default: the preset's learner,
-    else double DQN), each with its default and its docstring ("[leaf]": a sweep over it shares one
-    compiled program), then the names of TrainConfig's, which `--set` takes too."""
+    """What train.py --help lists below its flags (the run's settings are flags there): the settings of
+    `learner` (default: the preset's learner, else double DQN), each with its default and its docstring
+    ("[leaf]": a sweep over it shares one compiled program)."""
     from jaxbridge.core import settings as declared
     from jaxbridge.core.learner_settings import settings_class
     from jaxbridge.core.presets import preset_learner
@@ -68,11 +67,7 @@ def settings_help(learner: str | None = None, preset: str | None = None) -> str:
     name = learner or preset_learner(preset) or TrainConfig.learner.name
     with refusing("learner"):
         cls = settings_class(name)
-    return (f"settings of learner {name} (--set NAME=VALUE; --sweep NAME=V1,V2):\n"
-            + declared.described(cls, skip=("name",))
-            + "\n\n" + textwrap.fill("settings of the run (--set NAME=VALUE, or their flags above; "
-                                     "help(jaxbridge.TrainConfig) explains each): "
-                                     + ", ".join(n for n in declared.fields_of(TrainConfig) if n != "learner"), 110))
+    return f"settings of learner {name} (--set NAME=VALUE; --sweep NAME=V1,V2):\n" + declared.described(cls, skip=("name",))
 
 
 def _check_fits_env(config: TrainConfig, env_cls) -> None:
