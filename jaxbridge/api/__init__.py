@@ -15,6 +15,7 @@ docs/API.md shows each call with what it returns. Bad input raises InputError (a
 from jaxbridge.api.config import make_config, preset_values, settings_help
 from jaxbridge.api.devices import default_workers, local_devices
 from jaxbridge.api.envs import env_names, load_env, make_env, tasks
+from jaxbridge.api.models import PlannedEpisodes, learn_model, plan_alone, record_segments
 from jaxbridge.api.policies import Bridges, Drawn, Episodes, HandMade, Policy, hand_made, load, side_by_side
 from jaxbridge.api.results import read_experiment, run_labels, write_comparison
 from jaxbridge.api.sweeps import SWEEP_TASKS, NoveltySweep, sweep_lines, sweep_novelties
@@ -35,7 +36,7 @@ from jaxbridge.utils.files import WriteError
 
 __all__ = ["ALL_APPROACHES", "APPROACHES", "Attention", "Bridges", "Drawn", "EnvContractError", "Episodes", "Experiment", "HandMade",
            "Hyper", "InputError", "LearnerContractError", "QLearner", "check_env", "check_learner",
-           "Interrupted", "LOW_LEVEL", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "SIGNATURE", "Policy", "SWEEP_TASKS",
+           "Interrupted", "LOW_LEVEL", "PlannedEpisodes", "learn_model", "plan_alone", "record_segments", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "SIGNATURE", "Policy", "SWEEP_TASKS",
            "TrainConfig", "TrainOutput", "Training", "WriteError", "all_approaches", "default_approaches", "default_workers", "env_names", "hand_made",
            "load", "load_env", "local_devices", "make_config", "make_env", "make_train", "prepare", "prepare_resume",
            "preset_values", "read_experiment", "release_locks", "resume", "run_labels", "seed_keys", "settings_help", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",

@@ -1,0 +1,65 @@
+"""The planner's model learned from a seed's exploration, then its planner alone: per seed, record the
+meta-policy with the random bridge on the seed's training tasks (what a bridge explores before it has
+learned anything), learn the repaired model (jaxbridge.learn_model), and run its plans with no bridge
+on the seed's test tasks of each of the env's test protocols (a skill that changes nothing fails).
+
+    python -m bench.probes.model_repair --env multi_novelty --seeds 0-7
+
+A probe of development seeds: it refuses the test-seed sets (the model-repair study runs those).
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from collections import Counter
+
+import numpy as np
+
+import jaxbridge
+from bench.ledger import on_test_seeds, seed_list
+from jaxbridge.utils.cli import positive_int
+from jaxbridge.utils.stats import bootstrap_ci, ci_text
+
+
+def parse(argv=None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog="python -m bench.probes.model_repair", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="multi_novelty", help="the env (default: %(default)s)")
+    parser.add_argument("--seeds", default="0-7", help="development seeds, FIRST-LAST (default: %(default)s)")
+    parser.add_argument("--episodes", type=positive_int, default=20, help="training tasks per rollout (default: %(default)s)")
+    parser.add_argument("--rollouts", type=positive_int, default=3, help="rollouts of them recorded (default: %(default)s)")
+    parser.add_argument("--tasks", type=positive_int, default=10, help="test tasks per seed and protocol (default: %(default)s)")
+    args = parser.parse_args(argv)
+    try:
+        args.seed_list = seed_list(args.seeds)
+    except ValueError:
+        parser.error(f"--seeds takes FIRST-LAST, got {args.seeds!r}")
+    if not args.seed_list or on_test_seeds(args.seed_list):
+        parser.error(f"--seeds {args.seeds}: development seeds only (the test sets are the study's)")
+    if args.env not in jaxbridge.env_names():
+        parser.error(f"--env {args.env!r}: one of {', '.join(jaxbridge.env_names())}")
+    return args
+
+
+def main(argv=None) -> int:
+    args = parse(argv)
+    env_cls = jaxbridge.load_env(args.env)
+    rates: dict[str, list[float]] = {p: [] for p in env_cls.test_protocols}
+    for seed in args.seed_list:
+        start = time.perf_counter()
+        model = jaxbridge.learn_model(env_cls, jaxbridge.record_segments(env_cls, seed, args.episodes, args.rollouts))
+        line = [f"seed {seed:>3}: {len(model.learned_operators)} learned operators"]
+        for protocol in rates:
+            run = jaxbridge.plan_alone(model, env_cls, seed, args.tasks, protocol)
+            rates[protocol].append(run.solve_rate)
+            ended = Counter(e.ended for e in run.episodes)
+            line.append(f"{protocol} {run.solve_rate:.2f} ({', '.join(f'{n} {k}' for k, n in sorted(ended.items()))})")
+        print("; ".join(line) + f"; {time.perf_counter() - start:.0f} s", flush=True)
+    for protocol, values in rates.items():
+        low, high = bootstrap_ci(np.asarray(values))
+        print(f"{args.env} {protocol}, planner alone, seeds {args.seeds}: {ci_text(float(np.mean(values)), (low, high))}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

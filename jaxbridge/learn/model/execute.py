@@ -1,0 +1,64 @@
+"""The learned model's planner alone (no bridge): plan from the state reached, run the plan's first
+operator's skill to its end, again until the goal; a skill that changes nothing, no plan, or the horizon
+is a failure."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from envs_jax.base import NoveltyEnv, SkillCall
+from jaxbridge.learn.model.model import LearnedModel, plan
+from jaxbridge.learn.model.segments import TaskReader
+
+
+@dataclass(frozen=True)
+class PlannedEpisode:
+    success: bool
+    steps: int  # env steps taken
+    operators: tuple[str, ...]  # the operators run, in order
+    ended: str  # "goal", "no plan", "stalled" or "horizon"
+
+
+def _skill_step(env: NoveltyEnv, state, call: SkillCall):
+    """One env step of the running skill: (next state, the skill's end, whether the state changed)."""
+    nxt = env.step(state, env.skill_action(state, call))
+    nxt = env.after_skill_step(state, nxt, call)
+    return nxt, env.skill_done(state, nxt, call), jnp.any(env.state_vector(nxt) != env.state_vector(state))
+
+
+def _observed(env: NoveltyEnv, reader: TaskReader, state):
+    objects = jax.tree.map(np.asarray, env.objects(state))
+    return reader.view(objects.type_id, objects.features, objects.position, np.asarray(env.abstract(state)))
+
+
+def run_planner_alone(env: NoveltyEnv, model: LearnedModel, spec, horizon: int | None = None) -> PlannedEpisode:
+    """One episode of `spec` acted by the learned model's plans alone."""
+    reader, goal = TaskReader(env, spec), env.planner_problem(spec).goal
+    horizon = spec.horizon if horizon is None else horizon
+    step = jax.jit(partial(_skill_step, env))
+    state, steps, ran = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))), 0, []
+    while steps < horizon:
+        if bool(env.goal_reached(state)):
+            return PlannedEpisode(True, steps, tuple(ran), "goal")
+        view = _observed(env, reader, state)
+        found = plan(model, view, goal)
+        if not found:
+            return PlannedEpisode(False, steps, tuple(ran), "no plan")
+        op = found[0]
+        spec_of = env.skills[env.skill_index(op.skill)]
+        sampler = model.samplers.get(op.name)
+        param = sampler(view, op.slot_object) if sampler else (spec_of.param_low + spec_of.param_high) / 2
+        slot = env.object_slot(op.slot_object) if op.slot_object else 0
+        call = SkillCall(jnp.int32(env.skill_index(op.skill)), jnp.int32(slot), jnp.float32(param), jnp.bool_(True), jnp.int32(0))
+        changed, done = False, False
+        while not done and steps < horizon:
+            state, done, moved = step(state, call)
+            call, steps, changed = call.replace(steps=call.steps + 1), steps + 1, changed or bool(moved)
+        ran.append(str(op))
+        if not changed:
+            return PlannedEpisode(False, steps, tuple(ran), "stalled")
+    return PlannedEpisode(bool(env.goal_reached(state)), steps, tuple(ran), "goal" if env.goal_reached(state) else "horizon")

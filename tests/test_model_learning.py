@@ -1,0 +1,102 @@
+"""The model learner (jaxbridge/learn/model/): known operators recovered from synthetic segments, and Multi
+Novelty's repaired model, learned from seed 0's exploration, planning what no training task held."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import jaxbridge
+from envs_jax.base import SkillSpec
+from envs_jax.multi_novelty.tasks import BOTH, task_of
+from jaxbridge.learn.model.model import learn_model, plan
+from jaxbridge.learn.model.segments import Segment, View
+from planner import Domain, LiftedOperator, read_domain
+
+CELLS, GATE_CELL, PUSH_WINDOW = 4, 1, 0.1
+
+
+class GateRow:
+    """What the learner reads of an env class, for a row of cells with a gate in cell 1: the model knows
+    moves only; a move right out of the gate's cell needs the gate open, and PushGate opens it when the
+    robot is there and pushes within 0.1 of the gate's weight."""
+
+    object_types = {"robot": (), "cell": (), "gate": ("open", "weight")}
+    skills = (SkillSpec("MoveRobot"), SkillSpec("PushGate", 0.0, 1.0))
+    domain = Domain("gate-row", ("robot", "cell", "gate"), {"RobotInCell": ("robot", "cell"), "Adjacent": ("cell", "cell")}, (
+        LiftedOperator("MoveRobot", (("?robot", "robot"), ("?cur", "cell"), ("?tgt", "cell")),
+                       (("Adjacent", "?cur", "?tgt"), ("RobotInCell", "?robot", "?cur")), (("RobotInCell", "?robot", "?tgt"),),
+                       (("RobotInCell", "?robot", "?cur"),), "MoveRobot", "?tgt"),
+        LiftedOperator("PushGate", (("?robot", "robot"), ("?gate", "gate")), (), (), (), "PushGate", "?gate")))
+
+
+def _view(cell: int, gate_open: bool, weight: float) -> View:
+    names = ("robby", *(f"cell{i}" for i in range(CELLS)), "gate0")
+    features = np.zeros((len(names), 2), np.float32)
+    features[-1] = (gate_open, weight)
+    position = np.zeros((len(names), 3), np.float32)
+    position[:, 0] = [cell + 0.5, *(np.arange(CELLS) + 0.5), GATE_CELL + 0.5]
+    adjacent = {("Adjacent", f"cell{i}", f"cell{j}") for i in range(CELLS) for j in (i - 1, i + 1) if 0 <= j < CELLS}
+    return View(names, ("robot",) + ("cell",) * CELLS + ("gate",), features, position,
+                frozenset({("RobotInCell", "robby", f"cell{cell}")} | adjacent))
+
+
+def _gate_row_segments(rng: np.random.Generator, calls: int = 300) -> list[Segment]:
+    segments = []
+    for _ in range(calls):
+        cell, gate_open, weight = int(rng.integers(CELLS)), bool(rng.random() < 0.3), float(rng.uniform(0.2, 0.8))
+        if rng.random() < 0.6:
+            target = int(np.clip(cell + rng.choice([-1, 1]), 0, CELLS - 1))
+            blocked = target > cell == GATE_CELL and not gate_open
+            after = _view(cell if blocked else target, gate_open, weight)
+            segments.append(Segment("MoveRobot", f"cell{target}", 0.0, True, _view(cell, gate_open, weight), after))
+        else:
+            push = float(rng.random())
+            opens = cell == GATE_CELL and abs(push - weight) <= PUSH_WINDOW
+            segments.append(Segment("PushGate", "gate0", push, True, _view(cell, gate_open, weight),
+                                    _view(cell, gate_open or opens, weight)))
+    return segments
+
+
+def test_the_learner_recovers_a_gates_precondition_its_opening_operator_and_its_push():
+    model = learn_model(GateRow, _gate_row_segments(np.random.default_rng(0)))
+    moves = {op.name: set(op.pre) - set(GateRow.domain.operators[0].pre) for op in model.domain.operators if op.skill == "MoveRobot"}
+    # a move left needs nothing more; any other move an open gate (none: vacuously) where it starts
+    assert {frozenset(extra) for extra in moves.values()} == {frozenset({("before_cell_cell", "?tgt", "?cur")}),
+                                                              frozenset({("cell_all_gate_open", "?cur")})}
+    (push,) = [op for op in model.domain.operators if op.skill == "PushGate"]
+    variables = dict((t, v) for v, t in push.params)
+    gate, cell, robot = variables["gate"], variables["cell"], variables["robot"]
+    assert {("gate_not_open", gate), ("RobotInCell", robot, cell), ("same_place_cell_gate", cell, gate)} <= set(push.pre)
+    assert {("gate_open", gate), ("cell_all_gate_open", cell)} <= set(push.add) and ("gate_not_open", gate) in push.delete
+    for weight in (0.3, 0.5, 0.7):  # the push follows the gate's weight, inside the opening window
+        assert abs(model.samplers[push.name](_view(GATE_CELL, False, weight), "gate0") - weight) < PUSH_WINDOW / 2
+
+
+def test_the_gate_rows_model_plans_past_a_closed_gate_and_its_pddl_reads_back():
+    model = learn_model(GateRow, _gate_row_segments(np.random.default_rng(1)))
+    found = plan(model, _view(0, False, 0.5), frozenset({("RobotInCell", "robby", f"cell{CELLS - 1}")}))
+    assert [op.skill for op in found] == ["MoveRobot", "PushGate", "MoveRobot", "MoveRobot"]
+    read = read_domain(model.pddl())
+    assert {op.name: (set(op.pre), set(op.add), set(op.delete), op.skill, op.slot_param) for op in read.operators} == \
+        {op.name: (set(op.pre), set(op.add), set(op.delete), op.skill, op.slot_param) for op in model.domain.operators}
+
+
+@pytest.fixture(scope="module")
+def multi_novelty_model():
+    return jaxbridge.learn_model("multi_novelty", jaxbridge.record_segments("multi_novelty", seed=0))
+
+
+def test_multi_noveltys_model_from_seed_0s_exploration_opens_a_door_with_both_locks_without_a_bridge(multi_novelty_model):
+    both = task_of(np.random.default_rng(7), 10, (BOTH,))  # one door, keycard and latched: no training task holds one
+    run = jaxbridge.plan_alone(multi_novelty_model, "multi_novelty", seed=0, specs=[both])
+    (episode,) = run.episodes
+    assert episode.success, episode
+    skills = [name.split("(")[0].rsplit("_", 1)[0] for name in episode.operators]
+    assert {"FetchKey", "LiftLatch", "PushDoor", "ReplaceFuse", "TurnOnLight"} <= set(skills)
+
+
+def test_the_model_api_refuses_what_it_cannot_learn_from():
+    with pytest.raises(jaxbridge.InputError, match="no segments"):
+        jaxbridge.learn_model("multi_novelty", [])
+    with pytest.raises(jaxbridge.InputError, match="positive counts"):
+        jaxbridge.record_segments("multi_novelty", seed=0, episodes=0)
