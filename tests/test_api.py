@@ -91,9 +91,10 @@ class FirstCycle(Exception):
     """Raised where the first cycle would start: what came before it is the training's preparation."""
 
 
-def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_and_draws_each_seeds_tasks_once(monkeypatch, tmp_path):
+def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_draws_each_seeds_tasks_and_compiles_each_task_once(
+        monkeypatch, tmp_path):
     import train
-    from envs_jax.light_switch_door.env import LightSwitchDoor
+    from envs_jax.coffee.env import Coffee  # no plan_bound: the memory estimate compiles tasks as well
     from jaxbridge.api import config as api_config, training as api_training
     from jaxbridge.core import tasks
     from jaxbridge.learn.online import Cycle
@@ -108,13 +109,17 @@ def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_and_draw
     monkeypatch.setattr(api_config, "load_env", counting(lambda env: "env resolved", api_config.load_env))
     monkeypatch.setattr(api_training, "load_env", counting(lambda env: "env resolved", api_training.load_env))
     monkeypatch.setattr(api_config, "_check_fits_env", counting(lambda *a: "config checked", api_config._check_fits_env))
-    draw = LightSwitchDoor.train_tasks.__func__
-    monkeypatch.setattr(LightSwitchDoor, "train_tasks", classmethod(counting(lambda cls, seed, _: seed, draw)))
-    tasks._drawn_train_tasks.cache_clear()  # earlier tests of this process drew these seeds too
+    draw = Coffee.train_tasks.__func__
+    monkeypatch.setattr(Coffee, "train_tasks", classmethod(counting(lambda cls, seed, _: seed, draw)))
+    monkeypatch.setattr(tasks, "compile_task", counting(lambda env, spec: ("compiled", spec), tasks.compile_task))
+    tasks._drawn_train_tasks.cache_clear()  # earlier tests of this process drew and compiled these seeds' tasks too
+    tasks.compiled_task.cache_clear()
     def first_cycle(self, learners):
         raise FirstCycle()
     monkeypatch.setattr(Cycle, "__call__", first_cycle)
     with pytest.raises(FirstCycle):
-        train.main(["--env", "light_switch_door", "--approaches", "ours,random,no_callplanner", "--num-seeds", "2",
-                    "--first-seed", "3", "--cycles", "1", "--workers", "1", "--no-progress", "--out", str(tmp_path)])
-    assert counts == {"env resolved": 1, "config checked": 1, 3: 1, 4: 1}
+        train.main(["--env", "coffee", "--approaches", "ours,random,no_callplanner", "--num-seeds", "2", "--first-seed", "3",
+                    "--cycles", "1", "--episodes-per-cycle", "2", "--num-test-tasks", "2", "--test-protocol", "authors",
+                    "--workers", "1", "--no-progress", "--out", str(tmp_path)])
+    specs = tasks.training_specs(Coffee, [3, 4], 2)[0] + tasks.evaluation_specs(Coffee, [3, 4], 2, "authors")[0]
+    assert counts == {"env resolved": 1, "config checked": 1, 3: 1, 4: 1, **{("compiled", spec): 1 for spec in specs}}

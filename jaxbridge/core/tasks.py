@@ -50,18 +50,26 @@ class TaskBatch:
         return self.arrays.horizons
 
 
+# A task is compiled once per process for an equal env (a frozen capacity) and spec: the compilation is a
+# function of the two, and a shared CompiledTask keeps its uid, whose host planner stays registered (as
+# approaches sharing one batch already share it). So the memory estimate's tables are the run's own, and
+# a batch's repeated specs share one compilation.
+@functools.lru_cache(maxsize=1 << 10)
+def compiled_task(env: NoveltyEnv, spec) -> CompiledTask:
+    """`spec`'s grounding, host planner and plan table under `env` (planner/tables.compile_task), once."""
+    return compile_task(env, spec)
+
+
 def make_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int], horizons: list[int] | None = None,
                env: NoveltyEnv | None = None, progress: Callable[[int, int], None] | None = None) -> TaskBatch:
     """Pad and compile `specs` (test horizons by default) for an env sized to fit them all; `progress(done,
     total)` after each spec compiled."""
     env = env or env_cls.for_tasks(specs)
-    once: dict = {}  # repeated specs (a seed's training task, once per episode) share one compilation
+    compiled = []  # repeated specs (a seed's training task, once per episode) share one compilation
     for i, spec in enumerate(specs):
-        if spec not in once:
-            once[spec] = compile_task(env, spec)
+        compiled.append(compiled_task(env, spec))
         if progress is not None:
             progress(i + 1, len(specs))
-    compiled = [once[spec] for spec in specs]
     horizons = [s.horizon for s in specs] if horizons is None else horizons
     arrays = TaskArrays(tasks=env.stack_tasks(specs), tables=stack_tables(compiled),
                         horizons=jnp.asarray(horizons, jnp.int32))

@@ -10,10 +10,10 @@ import numpy as np
 
 from envs_jax import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.tasks import make_batch, test_specs, train_specs
+from jaxbridge.core.tasks import compiled_task, evaluation_specs, make_batch, test_specs, train_specs, training_specs
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.utils.errors import InputError
-from planner.tables import compile_task, table_shape
+from planner.tables import table_shape
 
 # A seed's learner state lives three times at once: the state a cycle reads (kept as the last good one),
 # the state it returns, and the host copy a checkpoint writes.
@@ -56,12 +56,15 @@ def state_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
 
 
 def task_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
-    """One seed's training and test tasks with their plan tables (the first seed's, compiled), which every
-    approach of an experiment shares."""
-    seed = config.first_seed
-    specs = train_specs(env_cls, seed, config.episodes_per_cycle) + test_specs(env_cls, seed, config.num_test_tasks,
-                                                                              config.test_protocol)
-    return tree_bytes(make_batch(env_cls, specs, [seed] * len(specs)).arrays)
+    """One seed's training and test tasks with their plan tables (the first seed's), which every approach
+    of an experiment shares; compiled by the envs the run's batches will have (each holds every seed's
+    tasks), so the batches reuse these compilations (core/tasks.compiled_task)."""
+    seed, episodes = config.first_seed, config.episodes_per_cycle
+    kinds = [(train_specs(env_cls, seed, episodes), training_specs(env_cls, config.seeds, episodes)[0]),
+             (test_specs(env_cls, seed, config.num_test_tasks, config.test_protocol),
+              evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0])]
+    return sum(tree_bytes(make_batch(env_cls, mine, [seed] * len(mine), env=env_cls.for_tasks(every)).arrays)
+               for mine, every in kinds)
 
 
 def limit_bytes(limit: int | None) -> tuple[int, str]:
@@ -98,7 +101,7 @@ def check_evaluation(env_cls: type[NoveltyEnv], specs: list, limit: int | None =
     env = env_cls.for_tasks(specs)
     bounds = [env.plan_bound(spec) for spec in specs]
     if any(b is None for b in bounds):
-        first = compile_task(env, specs[0])
+        first = compiled_task(env, specs[0])  # the batch then built reuses it
         bounds = [(first.num_reachable, len(first.ground_ops))]
     states, operators = (max(b[i] for b in bounds) for i in range(2))
     per_task = TABLE_COPIES * tree_bytes(table_shape(states, operators, env.num_atoms))
