@@ -100,3 +100,11 @@ def test_the_model_api_refuses_what_it_cannot_learn_from():
         jaxbridge.learn_model("multi_novelty", [])
     with pytest.raises(jaxbridge.InputError, match="positive counts"):
         jaxbridge.record_segments("multi_novelty", seed=0, episodes=0)
+
+
+def test_planning_alone_on_the_sweep_takes_the_sweeps_tasks_and_refuses_a_count_it_lacks(multi_novelty_model):
+    largest = jaxbridge.load_env("multi_novelty").novelty_sweep.counts[-1]
+    run = jaxbridge.plan_alone(multi_novelty_model, "multi_novelty", seed=0, num_tasks=1, novelties=largest)
+    assert [spec.instances for spec in run.specs] == [largest]
+    with pytest.raises(jaxbridge.InputError, match="sweep has counts"):
+        jaxbridge.plan_alone(multi_novelty_model, "multi_novelty", seed=0, novelties=largest + 1)

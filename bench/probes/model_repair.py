@@ -1,7 +1,8 @@
 """The planner's model learned from a seed's exploration, then its planner alone: per seed, record the
 meta-policy with the random bridge on the seed's training tasks (what a bridge explores before it has
 learned anything), learn the repaired model (jaxbridge.learn_model), and run its plans with no bridge
-on the seed's test tasks of each of the env's test protocols (a skill that changes nothing fails).
+on the seed's test tasks of each of the env's test protocols (a skill that changes nothing fails) and on
+tasks of the env's generalisation sweep at its largest count of novelty instances.
 
     python -m bench.probes.model_repair --env multi_novelty --seeds 0-7
 
@@ -44,20 +45,23 @@ def parse(argv=None) -> argparse.Namespace:
 def main(argv=None) -> int:
     args = parse(argv)
     env_cls = jaxbridge.load_env(args.env)
-    rates: dict[str, list[float]] = {p: [] for p in env_cls.test_protocols}
+    sweep = env_cls.novelty_sweep
+    largest = {f"{sweep.counts[-1]} {sweep.counted}": {"novelties": sweep.counts[-1]}} if sweep else {}
+    runs = {p: {"protocol": p} for p in env_cls.test_protocols} | largest
+    rates: dict[str, list[float]] = {name: [] for name in runs}
     for seed in args.seed_list:
         start = time.perf_counter()
         model = jaxbridge.learn_model(env_cls, jaxbridge.record_segments(env_cls, seed, args.episodes, args.rollouts))
         line = [f"seed {seed:>3}: {len(model.learned_operators)} learned operators"]
-        for protocol in rates:
-            run = jaxbridge.plan_alone(model, env_cls, seed, args.tasks, protocol)
-            rates[protocol].append(run.solve_rate)
+        for name, which in runs.items():
+            run = jaxbridge.plan_alone(model, env_cls, seed, args.tasks, **which)
+            rates[name].append(run.solve_rate)
             ended = Counter(e.ended for e in run.episodes)
-            line.append(f"{protocol} {run.solve_rate:.2f} ({', '.join(f'{n} {k}' for k, n in sorted(ended.items()))})")
+            line.append(f"{name} {run.solve_rate:.2f} ({', '.join(f'{n} {k}' for k, n in sorted(ended.items()))})")
         print("; ".join(line) + f"; {time.perf_counter() - start:.0f} s", flush=True)
-    for protocol, values in rates.items():
+    for name, values in rates.items():
         low, high = bootstrap_ci(np.asarray(values))
-        print(f"{args.env} {protocol}, planner alone, seeds {args.seeds}: {ci_text(float(np.mean(values)), (low, high))}")
+        print(f"{args.env} {name}, planner alone, seeds {args.seeds}: {ci_text(float(np.mean(values)), (low, high))}")
     return 0
 
 

@@ -62,12 +62,19 @@ class PlannedEpisodes:
 
 
 def plan_alone(model: LearnedModel, env: EnvLike, seed: int, num_tasks: int = 10, protocol: str | None = None,
-               specs: list | None = None) -> PlannedEpisodes:
+               specs: list | None = None, novelties: int | None = None) -> PlannedEpisodes:
     """The learned model's planner alone (no bridge: a skill that changes nothing is a failure) on the
-    seed's test tasks of `protocol` (default: train.py's), or on `specs`."""
-    env_cls = load_env(env)
-    if specs is None:
+    seed's test tasks of `protocol` (default: train.py's), on `specs`, or with `novelties` on tasks of the
+    env's generalisation sweep with that many novelty instances (drawn from `seed`, the sweep's horizons)."""
+    env_cls, horizon = load_env(env), (lambda spec: spec.horizon)
+    if novelties is not None:
+        sweep = env_cls.novelty_sweep
+        if sweep is None or novelties not in sweep.counts:
+            raise InputError(f"novelties: {env_cls.name}'s sweep has counts {sweep.counts if sweep else 'none'}, got {novelties}")
+        rng = np.random.default_rng(seed)
+        specs, horizon = [sweep.task(rng, novelties) for _ in range(num_tasks)], sweep.horizon
+    elif specs is None:
         protocol = protocol or default_test_protocol(env_cls)
         check_test_protocol(env_cls, protocol)
         specs = test_specs(env_cls, seed, num_tasks, protocol)
-    return PlannedEpisodes(list(specs), [run_planner_alone(env_cls.for_tasks([s]), model, s) for s in specs])
+    return PlannedEpisodes(list(specs), [run_planner_alone(env_cls.for_tasks([s]), model, s, horizon(s)) for s in specs])
