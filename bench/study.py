@@ -6,8 +6,9 @@ ledger's study), its envs and default seeds (the seed policy), the flags of its 
 (`Study.steps`, each kept in a Steps file so that a stopped command continues where it left off) and its
 records (`Study.write`). `Study.main` does the rest the same way for every study:
 
-  * one parser: --env where the study has several, --seeds FIRST-LAST, --cycles, --runs, --records,
-    --allow-dirty, --change and --chosen-on, then the study's own flags;
+  * one parser (bench/command.py's, as the probes' and timings', test seeds allowed): --env where the study
+    has several, --seeds FIRST-LAST, --cycles, --runs, --records, --allow-dirty, --change and --chosen-on,
+    then the study's own flags;
   * `begin`, before any work: uncommitted code refused (exit 2) unless --allow-dirty, whose records go
     to RUNS/records; on a test-seed set the run's reasons required and its ledger row appended;
   * the record: the study's fields beside its env, commit, command (`command_line`: the flags that
@@ -25,7 +26,8 @@ import time
 from pathlib import Path
 
 import jaxbridge
-from bench.ledger import append, on_test_seeds, seed_list, seed_set
+from bench.command import CommandParser
+from bench.ledger import append, on_test_seeds, seed_set
 from bench.records import RECORDS, ROOT, check_clean, git_commit, machine, refuse, run_child, shown
 from jaxbridge.utils.files import write_atomic
 
@@ -83,8 +85,7 @@ class Study:
         return f"bench.studies.{self.name}"
 
     def parser(self) -> argparse.ArgumentParser:
-        parser = argparse.ArgumentParser(prog=f"python -m {self.module}", description=self.doc,
-                                         formatter_class=argparse.RawDescriptionHelpFormatter)
+        parser = CommandParser(self.module, self.doc, test_seeds=True)  # its own --env and --seeds: a study's
         if len(self.envs) > 1:
             parser.add_argument("--env", required=True, choices=self.envs, help=self.env_help)
         parser.add_argument("--seeds", default=self.seeds,
@@ -109,12 +110,6 @@ class Study:
         args = parser.parse_args(argv)
         if len(self.envs) == 1:
             args.env = self.envs[0]
-        try:
-            args.seed_list = seed_list(args.seeds)
-        except ValueError:
-            args.seed_list = []
-        if not args.seed_list:
-            parser.error(f"--seeds takes FIRST-LAST with FIRST <= LAST, got {args.seeds!r}")
         args.on_test_seeds = on_test_seeds(args.seed_list)
         args.command = command_line(parser, args, self.module)
         self.check(parser, args)

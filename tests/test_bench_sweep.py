@@ -1,8 +1,9 @@
 """bench.probes.sweep's reliability line (the figures docs/TUNING.md's evidence commands print) and its
-config overrides."""
+config overrides; the probes' and timings' shared parser (bench/command.py) and its development seeds."""
 import numpy as np
 import pytest
 
+from bench.command import CommandParser
 from bench.probes.sweep import reliability, swept_config, sweep_parser
 
 
@@ -21,7 +22,7 @@ def test_the_sweeps_reliability_figures_count_late_dips_and_low_means():
 
 
 def test_bench_overrides_are_read_as_train_py_sweep_reads_them_and_bad_ones_are_argparse_errors(capsys):
-    parser = sweep_parser("probe", "doorknobs", 1, 0, 1)
+    parser = sweep_parser("bench.probes.sweep", "probe", "doorknobs", "0-0", 1)
     args = parser.parse_args(["feature_noise=0", "loop_guard=false", "hidden_sizes=64x16", "env_quirks=raw_offsets"])
     config, changes = swept_config(args)
     assert changes == {"feature_noise": 0.0, "loop_guard": False, "hidden_sizes": (64, 16), "env_quirks": ("raw_offsets",)}
@@ -35,3 +36,25 @@ def test_bench_overrides_are_read_as_train_py_sweep_reads_them_and_bad_ones_are_
             parser.parse_args([bad])
         err = capsys.readouterr().err
         assert exit_.value.code == 2 and message in err and "Traceback" not in err
+
+
+def test_a_probes_seeds_are_development_seeds_read_as_a_range_and_anything_else_is_a_one_line_flag_error(capsys):
+    parser = CommandParser("bench.probes.example", "probe", env="coffee", seeds="0-7")
+    args = parser.parse_args([])
+    assert (args.env, args.seeds, args.seed_list) == ("coffee", "0-7", list(range(8)))
+    assert parser.parse_args(["--seeds", "100-115"]).seed_list == list(range(100, 116))
+    for seeds, message in (("200-231", "--seeds 200-231: development seeds only"),  # a test-seed set
+                           ("190-205", "--seeds 190-205: development seeds only"),  # part of one
+                           ("7-3", "--seeds takes FIRST-LAST with FIRST <= LAST, got '7-3'"),
+                           ("a-b", "--seeds takes FIRST-LAST with FIRST <= LAST, got 'a-b'")):
+        with pytest.raises(SystemExit) as exit_:
+            parser.parse_args(["--seeds", seeds])
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and message in err and err.count("\n") == 1 and "Traceback" not in err
+        assert err.startswith("python -m bench.probes.example: error:")
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--env", "no_such_env"])
+    assert "invalid choice: 'no_such_env'" in capsys.readouterr().err
+    study = CommandParser("bench.studies.example", "study", test_seeds=True)
+    study.add_argument("--seeds", default="200-231")
+    assert study.parse_args([]).seed_list == list(range(200, 232))  # a study may: it writes the ledger's row

@@ -4,7 +4,7 @@ per test task (not the planner's), and its greedy decisions on the seed's first 
 evidence of Coffee's diagnosis (docs/TUNING.md): the twist's parameter sets how many steps it takes,
 and the 4-cup test tasks have few to spare.
 
-    python -m bench.probes.bridge_steps --env coffee --first-seed 0 --num-seeds 32 --cycles 100 --at 25,50
+    python -m bench.probes.bridge_steps --env coffee --seeds 0-31 --cycles 100 --at 25,50
 """
 from __future__ import annotations
 
@@ -43,7 +43,7 @@ def report(setup, learners, config, cycle: int) -> None:
 
 
 def main() -> None:
-    parser = sweep_parser(__doc__, "coffee", 32, 0, 100)
+    parser = sweep_parser(__spec__.name, __doc__, "coffee", "0-31", 100)
     parser.add_argument("--at", default="25,50", help="cycles to report at before the last (--cycles), "
                         "comma-separated (default: %(default)s)")
     args = parser.parse_args()

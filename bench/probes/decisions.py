@@ -2,7 +2,7 @@
 bridge's decisions on the test tasks it does not solve (step, skill, parameter, features, applicable
 actions, Q of the pick and of CallPlanner) and the cycle's test solve rates.
 
-    python -m bench.probes.decisions --env coffee --first-seed 0 --num-seeds 8 --cycles 40 updates_per_cycle=250
+    python -m bench.probes.decisions --env coffee --seeds 0-7 --cycles 40 updates_per_cycle=250
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ def greedy_test_rollout(setup, learners, num_seeds: int, num_tests: int):
 
 
 def main() -> None:
-    parser = sweep_parser(__doc__, "coffee", 8, 0, 40)
+    parser = sweep_parser(__spec__.name, __doc__, "coffee", "0-7", 40)
     parser.add_argument("--max-failed", type=int, default=3, help="failed tasks printed per seed")
     parser.add_argument("--max-decisions", type=int, default=12, help="decisions printed per failed task")
     args = parser.parse_args()

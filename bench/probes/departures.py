@@ -1,7 +1,7 @@
 """The departure table: the effect of each departure from the authors' code
-that a config switches (docs/design/approaches.md, "Departures"), measured on validation seeds from 100.
+that a config switches (docs/design/approaches.md, "Departures"), measured on validation seeds (default 100-115).
 
-    python -m bench.probes.departures --env light_switch_door [--num-seeds 16] [--out runs/departures]
+    python -m bench.probes.departures --env light_switch_door [--seeds 100-115] [--out runs/departures]
                                [--rows all|NAME,...] [--directions minus,plus]
 
 Per row, our method is trained twice: our default with that one setting set to the authors' value
@@ -14,16 +14,15 @@ cycles 25 and 100 with 95% bootstrap intervals over the seeds. Each run of 16 se
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import time
 from pathlib import Path
 
 import jaxbridge
+from bench.command import CommandParser
 from jaxbridge import TrainConfig
 from jaxbridge.utils import stats
 
-FIRST_VALIDATION_SEED = 100
 CYCLES = (25, 100)  # the table's columns (a shorter run reports its last cycle)
 
 
@@ -76,10 +75,7 @@ def train_or_read(config: TrainConfig, experiment: Path, devices: list) -> dict:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
-    parser.add_argument("--num-seeds", type=int, default=16,
-                        help=f"validation seeds {FIRST_VALIDATION_SEED}.. per run (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door", seeds="100-115")
     parser.add_argument("--out", type=Path, default=Path("runs/departures"), help="(default: %(default)s)")
     parser.add_argument("--cycles", type=int, default=100, help="cycles per run (default: %(default)s)")
     parser.add_argument("--rows", default="all", help="departures to measure, comma-separated, or all (default: all)")
@@ -94,14 +90,13 @@ def main() -> None:
     planned = runs(args.env, names, args.directions.split(","))
     results = {}
     for i, (name, config) in enumerate(planned.items(), 1):
-        config = dataclasses.replace(config, num_seeds=args.num_seeds, first_seed=FIRST_VALIDATION_SEED,
+        config = dataclasses.replace(config, num_seeds=len(args.seed_list), first_seed=args.seed_list[0],
                                      cycles=args.cycles)
         start = time.perf_counter()
         results[name] = train_or_read(config, args.out / args.env / name, devices)
         print(f"[{i}/{len(planned)}] {name}: {time.perf_counter() - start:.0f} s", flush=True)
 
-    seeds = f"{FIRST_VALIDATION_SEED}-{FIRST_VALIDATION_SEED + args.num_seeds - 1}"
-    print(f"\n{args.env}, ours, seeds {seeds}: test solve rate, mean and IQM [95% bootstrap CI]\n")
+    print(f"\n{args.env}, ours, seeds {args.seeds}: test solve rate, mean and IQM [95% bootstrap CI]\n")
     print("| run | what changes | " + " | ".join(f"mean at {c} | IQM at {c}" for c in CYCLES) + " |")
     print("|---|---|" + "---|---|" * len(CYCLES))
     for name, cells in results.items():

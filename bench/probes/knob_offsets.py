@@ -4,7 +4,7 @@ pick. A seed's training map shows it one or two doorways; the test maps' doorway
 offsets (docs/TUNING.md), and a bridge that turns the knob wrongly at some of them is the
 failure left on the evaluation seeds (issue #19).
 
-    python -m bench.probes.knob_offsets --first-seed 0 --num-seeds 8 --cycles 100 updates_per_cycle=150
+    python -m bench.probes.knob_offsets --seeds 0-7 --cycles 100 updates_per_cycle=150
 
 Per seed: the fraction of a grid of offsets (larger offset 0.08-0.18, smaller 0.03-0.12, the robot not
 yet moved, the knob at 0 and its door closed) where the best knob turn among 201 evenly spaced ones
@@ -43,7 +43,7 @@ def probe(env, net, q_params, features: jax.Array) -> tuple[jax.Array, jax.Array
 
 
 def main() -> None:
-    parser = sweep_parser(__doc__, "doorknobs", 8, 0, 100)
+    parser = sweep_parser(__spec__.name, __doc__, "doorknobs", "0-7", 100)
     args = parser.parse_args()
     if args.env != "doorknobs":
         parser.error("the probe's grid is Doorknobs' doorways: --env doorknobs")

@@ -9,7 +9,6 @@ steps for ours and Maple Q, agent steps for the low-level agents, each at least 
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 import jaxbridge
+from bench.command import CommandParser
 from jaxbridge.utils import stats
 
 ENVS = ("light_switch_door", "doorknobs", "coffee")
@@ -77,7 +77,7 @@ def plot(runs: list[dict], path: Path) -> None:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("experiments", type=Path, nargs="+", help="finished experiment directories (train.py --out/--name)")
     parser.add_argument("--figure", type=Path, default=None, help="write the figure here (PNG) (default: none)")
     args = parser.parse_args(argv)

@@ -2,20 +2,19 @@
 training task and test tasks), whether the closest interactable object (`core/observations.closest_object`)
 is the one the fix acts on (the env's `oracle_object`) or another object of its type: a distractor env's aim.
 
-    python -m bench.probes.stuck_objects --env doorknobs_distractor --first-seed 0 --num-seeds 8
+    python -m bench.probes.stuck_objects --env doorknobs_distractor --seeds 0-7
 """
 from __future__ import annotations
-
-import argparse
 
 import jax
 import numpy as np
 
+from bench.command import CommandParser
 from envs_jax import env_class
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.observations import closest_object
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
-from jaxbridge.utils.cli import non_negative_int, positive_int
+from jaxbridge.utils.cli import positive_int
 from jaxbridge.utils.stats import seed_range
 
 
@@ -46,13 +45,10 @@ def report(name: str, batch: TaskBatch) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="doorknobs_distractor", help="a registered env (default: %(default)s)")
-    parser.add_argument("--first-seed", type=non_negative_int, default=0)
-    parser.add_argument("--num-seeds", type=positive_int, default=8)
+    parser = CommandParser(__spec__.name, __doc__, env="doorknobs_distractor", seeds="0-7")
     parser.add_argument("--num-tasks", type=positive_int, default=10, help="test tasks per seed (default: %(default)s)")
     args = parser.parse_args()
-    cls, seeds = env_class(args.env), list(range(args.first_seed, args.first_seed + args.num_seeds))
+    cls, seeds = env_class(args.env), args.seed_list
     train = make_batch(cls, [cls.train_task(s) for s in seeds], seeds, [cls.train_steps] * len(seeds))
     print(f"{args.env}, seeds {seed_range(seeds)}, the oracle bridge's episodes")
     print(report("training tasks", train))

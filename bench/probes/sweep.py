@@ -2,16 +2,16 @@
 test solve rates per seed (digit = floor(10 x rate), 9 = 0.9-1.0) and a summary over seeds (the
 evidence of docs/TUNING.md).
 
-    python -m bench.probes.sweep --num-seeds 16 --first-seed 8 --cycles 40 batch_size=64 polyak_per=decision
+    python -m bench.probes.sweep --seeds 8-23 --cycles 40 batch_size=64 polyak_per=decision
 """
 from __future__ import annotations
 
-import jaxbridge
-import argparse
 import time
 
 import numpy as np
 
+import jaxbridge
+from bench.command import CommandParser
 from bench.timings.training import config_override, measure_cycles, with_overrides
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import select_devices
@@ -21,12 +21,9 @@ from jaxbridge.learn.setup import Setup
 LATE_MEAN, SEED_FLOOR = 0.95, 0.8
 
 
-def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cycles: int) -> argparse.ArgumentParser:
-    """The flags shared by the sweep-like scripts: which seeds, how long, and config overrides."""
-    parser = argparse.ArgumentParser(description=description, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default=env, help="environment (default: %(default)s)")
-    parser.add_argument("--num-seeds", type=int, default=num_seeds, help="seeds (default: %(default)s)")
-    parser.add_argument("--first-seed", type=int, default=first_seed, help="first seed (default: %(default)s)")
+def sweep_parser(module: str, doc: str, env: str, seeds: str, cycles: int) -> CommandParser:
+    """The probes' parser (--env, --seeds) with what the sweep-like probes share: how long, and config overrides."""
+    parser = CommandParser(module, doc, env=env, seeds=seeds)
     parser.add_argument("--cycles", type=int, default=cycles, help="cycles (default: %(default)s)")
     parser.add_argument("overrides", nargs="*", type=config_override,
                         help="TrainConfig fields as name=value (booleans: true/false)")
@@ -35,7 +32,7 @@ def sweep_parser(description: str, env: str, num_seeds: int, first_seed: int, cy
 
 def swept_config(args) -> tuple[TrainConfig, dict]:
     """The env's config for the chosen seeds and cycles with the overrides applied, and the overrides."""
-    config = jaxbridge.make_config(args.env, num_seeds=args.num_seeds, first_seed=args.first_seed, cycles=args.cycles)
+    config = jaxbridge.make_config(args.env, seeds=args.seed_list, cycles=args.cycles)
     return with_overrides(config, args.overrides)
 
 
@@ -53,7 +50,7 @@ def print_digits(seeds: list[int], rates: np.ndarray) -> None:
 
 
 def main() -> None:
-    parser = sweep_parser(__doc__, "light_switch_door", 16, 8, 40)
+    parser = sweep_parser(__spec__.name, __doc__, "light_switch_door", "8-23", 40)
     parser.add_argument("--save", help="also save the rates, float[seeds, cycles], to this .npy file")
     parser.add_argument("--bar", type=float, default=0.95,
                         help="a threshold on the mean test solve rate: the cycles from 50 on at or above it, and "

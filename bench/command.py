@@ -1,0 +1,53 @@
+"""The one parser of a bench command, a study's, a probe's or a timing's: `python -m MODULE` and the module's
+docstring, --env where the command takes one (a registered env), --seeds FIRST-LAST where it trains on seeds,
+then the command's own flags.
+
+    parser = CommandParser(__spec__.name, __doc__, env="coffee", seeds="0-7")
+    parser.add_argument("--cycles", type=int, default=40)
+    args = parser.parse_args()  # args.seeds as typed, args.seed_list its seeds
+
+An unreadable or empty --seeds is a flag error (one line, exit 2, as every flag's), and so is a test-seed set unless the
+parser allows them: only a study runs on test seeds, since only it appends the run's ledger row
+(bench/study.py); probes and timings are development tools.
+"""
+from __future__ import annotations
+
+import argparse
+
+import jaxbridge
+from bench.ledger import on_test_seeds, seed_list
+from jaxbridge.utils.cli import ArgumentParser
+
+
+class CommandParser(ArgumentParser):  # errors in one line, exit 2, as train.py's
+    def __init__(self, module: str, doc: str | None, *, env: str | None = None, seeds: str | None = None,
+                 test_seeds: bool = False):
+        super().__init__(prog=f"python -m {module}", description=doc,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+        self.test_seeds = test_seeds
+        if env:
+            names = jaxbridge.env_names()
+            self.add_argument("--env", default=env, choices=names, metavar="ENV",
+                              help=f"a registered env: {', '.join(names)} (default: %(default)s)")
+        if seeds:
+            self.add_argument("--seeds", default=seeds, help="development seeds, FIRST-LAST (default: %(default)s; the "
+                                                             "test-seed sets are the studies')")
+
+    def parse_args(self, args=None, namespace=None) -> argparse.Namespace:
+        parsed = super().parse_args(args, namespace)
+        if getattr(parsed, "seeds", None) is not None:
+            parsed.seed_list = self.seed_list(parsed.seeds)
+        return parsed
+
+    def seed_list(self, text: str) -> list[int]:
+        """FIRST-LAST's seeds; a parser error (exit 2) when unreadable, empty or, unless allowed, on test seeds."""
+        try:
+            seeds = seed_list(text)
+        except ValueError:
+            seeds = []
+        if not seeds:
+            self.error(f"--seeds takes FIRST-LAST with FIRST <= LAST, got {text!r}")
+        if not self.test_seeds and on_test_seeds(seeds):
+            self.error(f"--seeds {text}: development seeds only (a test-seed set is a study's, which writes its "
+                       "ledger row)")
+        return seeds
