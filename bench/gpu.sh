@@ -12,9 +12,9 @@ py=${PYTHON:-python3}
   $py -c "import jax, flax, optax; print('jax', jax.__version__, 'flax', flax.__version__, 'optax', optax.__version__, jax.devices())"
 } 2>&1 | tee "$out/gpu.txt"
 scale() { name=$1; shift; $py -m bench.timings.scaling "$@" --json "$out/$name.json" 2>&1 | tee "$out/$name.log"; }
-scale scaling_lsd --env light_switch_door --seeds 8,64,256,1024 --cycles 3
-scale scaling_doorknobs --env doorknobs --seeds 8,64 --cycles 3
-scale scaling_lsd_block1 --env light_switch_door --seeds 8 --seed-block 1 --cycles 2
+scale scaling_lsd --env light_switch_door --seed-counts 8,64,256,1024 --cycles 3
+scale scaling_doorknobs --env doorknobs --seed-counts 8,64 --cycles 3
+scale scaling_lsd_block1 --env light_switch_door --seed-counts 8 --seed-block 1 --cycles 2
 # A sweep's settings are more slots of the same program: 4 learning-rate/epsilon settings x 64 seeds, blocks of 64.
 { start=$(date +%s)
   $py train.py --env light_switch_door --approaches ours --num-seeds 64 --seed-block 64 --cycles 3 --no-progress \

@@ -47,11 +47,17 @@ RENAMED = {
     "multi_novelty_page": "pages.multi_novelty", "report": "pages.report",
 }
 
+# The timings whose --num-seeds N became --seeds FIRST-LAST (bench/command.py), as recorded commands are shown.
+SEED_COUNTED = ("approaches", "cold_start", "devices", "evaluation", "identical", "training", "updates")
+
 
 def current_command(command: str) -> str:
-    """A recorded command with today's module names (`RENAMED`; the old `python -m bench`: the table)."""
+    """A recorded command with today's module names (`RENAMED`; the old `python -m bench`: the table) and
+    today's seed flag (a timing's old --num-seeds N counted from seed 0: --seeds 0-LAST)."""
     command = re.sub(r"python -m bench(?=\s|$)", "python -m bench.timings.table", command)
-    return re.sub(r"\bbench\.(\w+)\b", lambda m: "bench." + RENAMED.get(m[1], m[1]), command)
+    command = re.sub(r"\bbench\.(\w+)\b", lambda m: "bench." + RENAMED.get(m[1], m[1]), command)
+    return re.sub(rf"(python -m bench\.timings\.(?:{'|'.join(SEED_COUNTED)})\b.*?)--num-seeds (\d+)",
+                  lambda m: f"{m[1]}--seeds 0-{int(m[2]) - 1}", command)
 
 
 def authors_seed_run_s() -> dict[str, float]:

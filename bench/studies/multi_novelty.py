@@ -90,8 +90,8 @@ class MultiNovelty(Study):
         sweep = steps.run("sweep", lambda: sweep_step(run))
         greedy = steps.run("greedy", lambda: greedy_rows(run, names, kept))
         learned = ["ours"] + [n for n in names if n not in NOT_LEARNED and n != "ours"]
-        cost = steps.run("cost", lambda: run_child(["python", "-m", "bench.timings.training", "--env", ENV, "--num-seeds",
-                                                    str(min(len(args.seed_list), 8)), "--cycles", str(args.cost_cycles),
+        cost = steps.run("cost", lambda: run_child(["python", "-m", "bench.timings.training", "--env", ENV, "--seeds",
+                                                    f"0-{min(len(args.seed_list), 8) - 1}", "--cycles", str(args.cost_cycles),
                                                     "--approach", ",".join(learned)], keep_stdout=True))
         return {"run": run, "names": names, "train": trained, "sweep": sweep, "greedy": greedy, "cost": cost}
 

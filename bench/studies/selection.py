@@ -57,7 +57,7 @@ class Selection(Study):
     def steps(self, args, steps: Steps) -> dict:
         env, run = args.env, args.runs / args.env
         cost = steps.run("cost", lambda: run_child(
-            ["python", "-m", "bench.timings.training", "--env", env, "--num-seeds", str(COST_SEEDS), "--cycles",
+            ["python", "-m", "bench.timings.training", "--env", env, "--seeds", f"0-{COST_SEEDS - 1}", "--cycles",
              str(COST_CYCLES), "--approach", "ours,ours_learned_selection"], keep_stdout=True))
         kept = [c for c in CYCLES if c < args.cycles]  # the table's earlier cycles: attention over training
         flags = ["--env", env, "--approaches", ",".join(approaches(env)), *seed_flags(args)]

@@ -10,7 +10,6 @@ figure is the median over pairs of B's wall time over A's. Prints one line per r
 """
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import statistics
@@ -19,6 +18,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from bench.command import CommandParser
 from bench.records import ROOT, cold_cache, run_child
 
 
@@ -46,8 +46,7 @@ def timed(tree: Path, command: list[str], out: Path) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.timings.ab", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--base", required=True, help="commit A (the reference)")
     parser.add_argument("--head", default="HEAD", help="commit B (default: %(default)s)")
     parser.add_argument("--pairs", type=int, default=2, help="A/B pairs, back to back (default: %(default)s)")

@@ -1,7 +1,7 @@
 """Wall-clock of the paper's figure: every approach, 8 seeds x 100 cycles, through the real code path
 (`train.py`'s driver, run files and checkpoints included), into a temporary directory.
 
-    python -m bench.timings.approaches [--env light_switch_door] [--num-seeds 8] [--cycles 100] [--approaches all]
+    python -m bench.timings.approaches [--env light_switch_door] [--seeds 0-7] [--cycles 100] [--approaches all]
                                [--workers N] [--devices auto|N]
 
 The layout is train.py's: approaches in --workers threads, each sharding its seeds over --devices
@@ -13,7 +13,6 @@ same figure (results.md: on the order of 100 CPU-hours for 6 approaches x 8 seed
 """
 from __future__ import annotations
 
-import argparse
 import json
 import resource
 import tempfile
@@ -22,15 +21,14 @@ from pathlib import Path
 
 import jax
 
+from bench.command import CommandParser
 import jaxbridge
 from bench.timings.training import AUTHORS_WHOLE_RUN_S  # one seed-run of "ours", per env (results.md)
 from jaxbridge.utils.cli import auto_or_positive_int
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
-    parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door", seeds="0-7")
     parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
     parser.add_argument("--approaches", default="all", help="comma-separated approaches or all (default: all)")
     parser.add_argument("--workers", type=int, default=None, help="approaches at a time (default: one per core)")
@@ -42,17 +40,17 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         out = args.keep or Path(tmp) / args.env
         start = time.perf_counter()
-        summaries = jaxbridge.train(args.env, names, args.num_seeds, args.cycles, out.parent, out.name, workers=args.workers,
+        summaries = jaxbridge.train(args.env, names, args.seed_list, args.cycles, out.parent, out.name, workers=args.workers,
                                     devices=devices).summaries
         total = time.perf_counter() - start
         results = (out / "results.md").read_text()
     kinds = "+".join(sorted({d.platform for d in devices}))
     print(f"jax {jax.__version__}, each approach's seeds over {len(devices)} {kinds} device(s)")
-    print(f"{args.env}: {len(names)} approaches x {args.num_seeds} seeds x {args.cycles} cycles, "
+    print(f"{args.env}: {len(names)} approaches x {len(args.seed_list)} seeds x {args.cycles} cycles, "
           f"{args.workers or jaxbridge.default_workers(names)} at a time")
     for name, info in summaries.items():
         print(f"  {name:>20}: {info['elapsed_s']:7.1f} s   smooth test reward {info['smooth_reward_final']['mean']:.3f}")
-    seed_runs, authors = len(names) * args.num_seeds, AUTHORS_WHOLE_RUN_S[args.env]
+    seed_runs, authors = len(names) * len(args.seed_list), AUTHORS_WHOLE_RUN_S[args.env]
     print(f"total: {total:.1f} s ({total / 60:.1f} min) for {seed_runs} seed-runs; "
           f"authors: ~{authors * seed_runs / 3600:,.0f} CPU-hours at {authors:,} s per seed-run "
           f"-> {authors * seed_runs / total:,.0f}x")

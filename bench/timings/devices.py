@@ -2,7 +2,7 @@
 (cycles of the two layouts interleaved, so machine noise hits both alike), and a check that both
 layouts give bit-identical metrics and parameters.
 
-    python -m bench.timings.devices [--num-seeds 8] [--cycles 8] [--devices 2] [--seed-block 1]
+    python -m bench.timings.devices [--seeds 0-7] [--cycles 8] [--devices 2] [--seed-block 1]
 
 On a CPU-only machine the N devices are virtual CPU devices (one per core is what train.py's
 `--devices auto` uses).
@@ -10,19 +10,18 @@ On a CPU-only machine the N devices are virtual CPU devices (one per core is wha
 from __future__ import annotations
 
 import jaxbridge
-import argparse
 import time
 
 import jax
 import numpy as np
 
+from bench.command import CommandParser
+
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door", seeds="0-7")
     parser.add_argument("--cycles", type=int, default=8, help="cycles per layout, the first one compiles (default: %(default)s)")
     parser.add_argument("--devices", type=int, default=2, help="devices of the sharded layout (default: %(default)s)")
-    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
     args = parser.parse_args()
 
@@ -31,7 +30,7 @@ def main() -> None:
     from jaxbridge.learn.online import Cycle
     from jaxbridge.learn.setup import make_setup
 
-    config = jaxbridge.make_config(args.env, num_seeds=args.num_seeds, seed_block=args.seed_block)
+    config = jaxbridge.make_config(args.env, seeds=args.seed_list, seed_block=args.seed_block)
     setup = make_setup(config)
     layouts = {}
     for n in (1, args.devices):

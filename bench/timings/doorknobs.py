@@ -11,13 +11,14 @@ best of each is kept, so a neighbour's load on a shared machine spoils both alik
 """
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+from bench.command import CommandParser
 
 STEPS = 200
 FIGURES = ("oracle rollout, 80 test tasks", "skill_action (MoveToDoor)", "skill_initiable (8 ground ops)")
@@ -90,7 +91,7 @@ def in_tree(tree: Path, repeats: int) -> dict:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--repeats", type=int, default=5, help="timings per figure, best kept (default: %(default)s)")
     parser.add_argument("--baseline", type=Path, default=None, help="another code tree to compare with (default: none)")
     parser.add_argument("--rounds", type=int, default=2, help="turns per tree with --baseline (default: %(default)s)")

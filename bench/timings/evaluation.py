@@ -2,7 +2,7 @@
 (`TrainedPolicy.run`: one jitted, vmapped rollout of every episode): building the tasks on the host,
 the first call (compilation included), then the median of 3 calls.
 
-    python -m bench.timings.evaluation [--envs light_switch_door,doorknobs,coffee] [--num-seeds 8] [--tasks 100]
+    python -m bench.timings.evaluation [--envs light_switch_door,doorknobs,coffee] [--seeds 0-7] [--tasks 100]
     python -m bench.timings.evaluation --run runs/doorknobs/ours     # a trained run's checkpoint
 
 Without --run each env's networks are freshly initialised: an untrained greedy bridge rarely solves a
@@ -11,7 +11,6 @@ task, so its episodes run to the horizon, the slowest case for a rollout.
 from __future__ import annotations
 
 import jaxbridge
-import argparse
 import os
 import statistics
 import time
@@ -20,14 +19,15 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from bench.command import CommandParser
 from envs_jax import BUILTIN
 from jaxbridge.run.evaluate import TrainedPolicy, load_policy
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.core.tasks import evaluation_batch
 
 
-def fresh_policy(env: str, num_seeds: int) -> TrainedPolicy:
-    config = jaxbridge.make_config(env, num_seeds=num_seeds)
+def fresh_policy(env: str, seeds: list[int]) -> TrainedPolicy:
+    config = jaxbridge.make_config(env, seeds=seeds)
     setup = make_setup(config)
     return TrainedPolicy(setup, 0, setup.init_learners())
 
@@ -50,14 +50,13 @@ def measure(policy: TrainedPolicy, tasks: int) -> dict:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__, seeds="0-7")
     parser.add_argument("--envs", default=",".join(BUILTIN), help="comma-separated envs (default: %(default)s)")
-    parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
     parser.add_argument("--tasks", type=int, default=100, help="test tasks per seed (default: %(default)s)")
     parser.add_argument("--run", type=Path, default=None, help="time this run's checkpoint instead")
     args = parser.parse_args()
     policies = ([load_policy(args.run)] if args.run else
-                [fresh_policy(env, args.num_seeds) for env in args.envs.split(",")])
+                [fresh_policy(env, args.seed_list) for env in args.envs.split(",")])
     print(f"load average {os.getloadavg()[0]:.1f}; {jax.device_count()} device(s)")
     print(f"{'env':<18} {'episodes':>8} {'env steps':>9} {'tasks s':>8} {'1st call s':>10} {'run s':>6} "
           f"{'env steps/s':>11} {'solved':>6}")

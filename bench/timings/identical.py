@@ -1,19 +1,19 @@
 """Whether a change kept every number: each approach's metrics.csv at two commits, compared byte for byte.
 
-    python -m bench.timings.identical --base f152312 --env doorknobs [--num-seeds 2] [--cycles 5]
+    python -m bench.timings.identical --base f152312 --env doorknobs [--seeds 0-1] [--cycles 5]
                               [--approaches all,plan_progress,...] [--preset pqn]
 
 Each commit is checked out into its own worktree and trains the same short experiment there
-(`train.py --env E --approaches ... --num-seeds N --cycles C`); prints, per approach, "identical" or
+(`train.py --env E --approaches ... --first-seed F --num-seeds N --cycles C`); prints, per approach, "identical" or
 "differs" (with the first differing line), and exits 1 if any differs.
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import tempfile
 from pathlib import Path
 
+from bench.command import CommandParser
 from bench.timings.ab import checked_out
 from bench.records import run_child
 
@@ -30,18 +30,17 @@ def first_difference(a: str, b: str) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.timings.identical", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__, seeds="0-1")
     parser.add_argument("--base", required=True, help="commit A (the reference)")
     parser.add_argument("--head", default="HEAD", help="commit B (default: %(default)s)")
     parser.add_argument("--env", required=True, help="the env to train on")
     parser.add_argument("--approaches", default=EVERY, help="train.py's --approaches (default: every kind)")
     parser.add_argument("--preset", default=None, help="train.py's --preset (e.g. pqn for PQN's run)")
-    parser.add_argument("--num-seeds", type=int, default=2, help="seeds (default: %(default)s)")
     parser.add_argument("--cycles", type=int, default=5, help="cycles (default: %(default)s)")
     args = parser.parse_args(argv)
-    flags = ["--env", args.env, "--approaches", args.approaches, "--num-seeds", str(args.num_seeds), "--cycles",
-             str(args.cycles), "--no-progress", *(["--preset", args.preset] if args.preset else [])]
+    flags = ["--env", args.env, "--approaches", args.approaches, "--first-seed", str(args.seed_list[0]),
+             "--num-seeds", str(len(args.seed_list)), "--cycles", str(args.cycles), "--no-progress",
+             *(["--preset", args.preset] if args.preset else [])]
     commits = {"A": args.base, "B": args.head}
     with tempfile.TemporaryDirectory(prefix="jaxbridge-identical-") as tmp, checked_out(commits, Path(tmp)) as trees:
         runs = {}

@@ -19,7 +19,6 @@ whole per-seed cycle.
 from __future__ import annotations
 
 import jaxbridge
-import argparse
 import json
 import statistics
 import sys
@@ -32,6 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from bench.command import CommandParser
 from bench.records import DIRTY_RECORDS, RECORDS, ROOT, check_clean, git_commit, machine, shown
 from bench.timings.update_parts import measure as update_parts
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
@@ -151,9 +151,7 @@ def with_ratios(measured: dict) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.timings.maple_q", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="doorknobs", help="environment (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="doorknobs")
     parser.add_argument("--approaches", default="ours,maple_q", help="comma-separated, the first the reference "
                         "(default: %(default)s)")
     parser.add_argument("--warmup", type=int, default=5, help="cycles before the parts are timed (default: %(default)s)")

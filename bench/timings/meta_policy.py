@@ -7,13 +7,13 @@ Prints compile time and the median over repeats of steady-state throughput.
 """
 from __future__ import annotations
 
-import argparse
 import statistics
 import time
 
 import jax
 
-from envs_jax import env_class, registered
+from bench.command import CommandParser
+from envs_jax import env_class
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import evaluation_batch
@@ -51,10 +51,8 @@ def cases(env_cls, full: bool = True) -> dict:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door")
     parser.add_argument("--repeats", type=int, default=30, help="timed rollouts per case (default: %(default)s)")
-    parser.add_argument("--env", default="light_switch_door", choices=registered(),
-                        help="environment (default: %(default)s)")
     args = parser.parse_args()
     print(f"jax {jax.__version__}, devices: {jax.devices()}")
     print(f"{'case':<28} {'episodes':>8} {'env steps':>9} {'solved':>6} {'compile s':>9} {'ms/rollout':>10} "

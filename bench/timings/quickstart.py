@@ -12,12 +12,12 @@ quote these records (python -m bench.pages.render).
 """
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import tempfile
 from pathlib import Path
 
+from bench.command import CommandParser
 from bench.records import DIRTY_RECORDS, ENVS, QUICKSTART, ROOT, check_clean, cold_cache, git_commit, machine, run_child
 
 
@@ -37,8 +37,7 @@ def measure(env: str, out: Path) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.timings.quickstart", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--envs", default=",".join(ENVS), help="comma-separated envs (default: all three)")
     parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
                         help="train into DIR/ENV and keep the runs (default: a temporary directory, removed)")

@@ -5,13 +5,14 @@ a fresh `train.py` / `eval.py` process as a user starts it, timed over --repeats
 """
 from __future__ import annotations
 
-import argparse
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from bench.command import CommandParser
 
 ROOT = Path(__file__).resolve().parents[2]  # the repository
 
@@ -37,7 +38,7 @@ def time_refusal(argv: list[str]) -> tuple[float, str]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--repeats", type=int, default=5, help="processes timed per case (default: %(default)s)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as out:

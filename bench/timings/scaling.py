@@ -2,7 +2,7 @@
 seeds' tasks and plan tables (host), the first cycle (mostly compilation), the steady-state seconds per
 cycle, and the projected paper protocol (100 cycles) against the authors' run time per seed-run.
 
-    python -m bench.timings.scaling [--env light_switch_door] [--seeds 8,64,256,1024] [--seed-block auto,1,...]
+    python -m bench.timings.scaling [--env light_switch_door] [--seed-counts 8,64,256,1024] [--seed-block auto,1,...]
                             [--cycles 3] [--devices auto|N] [--json PATH]
 
 --seed-block auto vmaps all of a device's seeds as one block (what a GPU needs); an integer fixes the
@@ -13,12 +13,12 @@ it is measured, and --json is rewritten after each, so a run cut short keeps wha
 from __future__ import annotations
 
 import jaxbridge
-import argparse
 import json
 from pathlib import Path
 
 import numpy as np
 
+from bench.command import CommandParser
 from bench.timings.training import AUTHORS_WHOLE_RUN_S
 
 
@@ -30,9 +30,9 @@ def _peak_bytes(devices) -> int | None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
-    parser.add_argument("--seeds", default="8,64,256,1024", help="seed counts, comma-separated (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door")
+    parser.add_argument("--seed-counts", default="8,64,256,1024",
+                        help="seed counts, each from seed 0, comma-separated (default: %(default)s)")
     parser.add_argument("--seed-block", default="auto", help="auto (a device's seeds in one block) or N, or a "
                                                                "comma-separated list of them (default: auto)")
     parser.add_argument("--cycles", type=int, default=3, help="cycles timed per seed count, the first compiles "
@@ -50,7 +50,7 @@ def main() -> None:
     print(f"{'seeds':>6} {'block':>6} {'build s':>8} {'first s':>8} {'s/cycle':>8} {'100 cycles s':>13} "
           f"{'s/seed-run':>11} {'x authors':>10}", flush=True)
     rows = []
-    counts = [int(n) for n in args.seeds.split(",")]
+    counts = [int(n) for n in args.seed_counts.split(",")]
     blocks = args.seed_block.split(",")
     for num_seeds, block in ((n, b) for n in counts for b in blocks):
         per_device = -(-num_seeds // len(devices))

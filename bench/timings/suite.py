@@ -9,19 +9,18 @@ outcome line and the machine.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import re
 import subprocess
 import sys
 import time
 
+from bench.command import CommandParser
 from bench.records import DIRTY_RECORDS, ROOT, SUITE, SUITE_CLAIMS, check_clean, git_commit, machine
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.timings.suite", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--claims", action="store_true",
                         help="time the claim tests (python -m pytest -m claims) instead of the default suite")
     parser.add_argument("--allow-dirty", action="store_true",

@@ -33,6 +33,7 @@ import sys
 import time
 from pathlib import Path
 
+from bench.command import CommandParser
 from bench.records import BENCH, ENVS, ROOT, git_commit
 
 
@@ -100,8 +101,7 @@ def in_fresh_process(env: str, args) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.timings.table", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--quick", action="store_true",
                         help="fewer repetitions (2 measured cycles, 5 rollouts, 2 update calls) for a smoke test")
     parser.add_argument("--devices", default="auto", metavar="auto|N",

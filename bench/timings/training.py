@@ -1,6 +1,6 @@
 """Wall-clock of the paper's protocol for our method: 8 seeds x 100 cycles, seeds over every device.
 
-    python -m bench.timings.training [--env doorknobs] [--num-seeds 8] [--cycles 100] [--devices auto|N]
+    python -m bench.timings.training [--env doorknobs] [--seeds 0-7] [--cycles 100] [--devices auto|N]
                              [--seed-block 1] [--approach ours[,plan_progress,...]]
 
 Prints the time to build tasks and plans, the first cycle (mostly compilation), the steady-state
@@ -17,6 +17,7 @@ import time
 import jax
 import numpy as np
 
+from bench.command import CommandParser
 from bench.records import authors_seed_run_s
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.grid import owner, parse_value
@@ -115,10 +116,8 @@ def report(config: TrainConfig, run: dict) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door", seeds="0-7")
     parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
-    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
     parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
     parser.add_argument("--approach", default="ours", help="which approach, or a comma-separated list trained a "
@@ -129,7 +128,7 @@ def main() -> None:
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
     print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s), seed block {args.seed_block}")
-    configs = {approach: with_overrides(jaxbridge.make_config(args.env, num_seeds=args.num_seeds, cycles=args.cycles,
+    configs = {approach: with_overrides(jaxbridge.make_config(args.env, seeds=args.seed_list, cycles=args.cycles,
                                                             seed_block=args.seed_block, approach=approach),
                                         args.overrides)[0] for approach in args.approach.split(",")}
     runs = measure_interleaved(configs, seeds_over, args.cycles)

@@ -16,7 +16,6 @@ parts do not add up to the whole exactly: XLA fuses across them in `learn`.
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 
@@ -24,6 +23,7 @@ import jax
 import jax.numpy as jnp
 import optax
 
+from bench.command import CommandParser
 import jaxbridge
 from jaxbridge.learn import dqn
 from jaxbridge.learn.hyper import Hyper
@@ -100,8 +100,7 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door")
     parser.add_argument("--approaches", default="ours,no_feature_selection,maple_q",
                         help="comma-separated approaches (default: %(default)s)")
     parser.add_argument("--fill", type=int, default=16384, help="stored transitions (default: %(default)s)")

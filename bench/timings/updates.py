@@ -1,7 +1,7 @@
 """Double-DQN minibatch updates per second, every seed at once, on the training layout (seeds over the
 devices, each device updating its seeds one after another, as in a cycle).
 
-    python -m bench.timings.updates [--env light_switch_door] [--num-seeds 8] [--updates 1000] [--devices auto|N]
+    python -m bench.timings.updates [--env light_switch_door] [--seeds 0-7] [--updates 1000] [--devices auto|N]
 
 The updates are `jaxbridge.learn.dqn.update_step` (the minibatch slots drawn up front by `minibatch_indices`; Adam step, polyak
 step) in a `lax.scan`, as `learn` runs them; the buffer is the one after two training cycles. Not timed:
@@ -10,12 +10,13 @@ the target relabelling that precedes them in a cycle.
 from __future__ import annotations
 
 import jaxbridge
-import argparse
 import statistics
 import time
 
 import jax
 import jax.numpy as jnp
+
+from bench.command import CommandParser
 
 
 def measure_updates(setup, seeds, learners, updates: int, repeats: int = 3) -> dict:
@@ -53,9 +54,7 @@ def measure_updates(setup, seeds, learners, updates: int, repeats: int = 3) -> d
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="light_switch_door", help="environment (default: %(default)s)")
-    parser.add_argument("--num-seeds", type=int, default=8, help="seeds (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door", seeds="0-7")
     parser.add_argument("--updates", type=int, default=None, help="updates per call (default: the env's per cycle)")
     parser.add_argument("--repeats", type=int, default=5, help="timed calls (default: %(default)s)")
     parser.add_argument("--devices", default="auto", help="as train.py (default: auto)")
@@ -64,7 +63,7 @@ def main() -> None:
     devices = select_devices(device_count_arg(args.devices))
     from bench.timings.training import measure_cycles
 
-    config = jaxbridge.make_config(args.env, num_seeds=args.num_seeds)
+    config = jaxbridge.make_config(args.env, seeds=args.seed_list)
     run = measure_cycles(config, devices, cycles=2)
     r = measure_updates(run["setup"], run["seeds"], run["learners"], args.updates or config.updates_per_cycle,
                         args.repeats)
