@@ -23,6 +23,7 @@ class LearnedModel:
     domain: Domain  # the repaired model: the env's, its stalling operators repaired, the learned ones added
     grammar: Grammar
     samplers: dict[str, Sampler]  # by operator name, for skills with a parameter range
+    base_operators: tuple[LiftedOperator, ...] = ()  # the env's model's, as it was
 
     def atoms(self, view: View) -> frozenset[Atom]:
         """The model's atoms that hold in `view`: the planner's own and the invented ones it uses."""
@@ -35,8 +36,6 @@ class LearnedModel:
     def learned_operators(self) -> tuple[LiftedOperator, ...]:
         """The operators that are not the env's model's as it was."""
         return tuple(op for op in self.domain.operators if op not in self.base_operators)
-
-    base_operators: tuple[LiftedOperator, ...] = ()
 
 
 def learn_model(env_cls: type[NoveltyEnv], segments: list[Segment]) -> LearnedModel:

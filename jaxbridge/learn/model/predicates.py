@@ -16,6 +16,7 @@ The robot takes part in no relation: where it is, is the planner model's own (ea
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 from dataclasses import dataclass
 
@@ -121,24 +122,32 @@ class Grammar:
         spans = tuple(dict.fromkeys(Span(p.place_type, p.unary) for p in self.all_at if p.name in chosen))
         return dataclasses.replace(self, spans=spans)
 
+    @functools.cached_property
+    def _kinds(self) -> dict[str, int]:
+        composite = {p.name: 1 + isinstance(p, Either) for p in self.unary} | {p.name: 1 for p in self.relations}
+        return composite | {p.name: 2 + isinstance(p.unary, Either) for p in self.all_at + self.spans}
+
+    @functools.cached_property
+    def _literals(self) -> dict[str, Literal]:
+        return {p.name: p for p in self.unary if isinstance(p, Literal)}
+
     def kind(self, name: str) -> int:
         """How composite the predicate `name` is: 0 the planner model's, 1 a literal or relation, 2 a pair
         of literals or a quantified literal, 3 a quantified pair (the learner prefers the simplest)."""
-        composite = {p.name: 1 + isinstance(p, Either) for p in self.unary} | {p.name: 1 for p in self.relations}
-        composite |= {p.name: 2 + isinstance(p.unary, Either) for p in self.all_at + self.spans}
-        return composite.get(name, 0)
+        return self._kinds.get(name, 0)
 
     def is_literal(self, name: str) -> bool:
-        return any(p.name == name and isinstance(p, Literal) for p in self.unary)
+        return name in self._literals
 
     def complement(self, name: str) -> str | None:
         """The literal of the same feature and threshold with the other sign (None: not a literal)."""
-        found = [p for p in self.unary if p.name == name and isinstance(p, Literal)]
-        return dataclasses.replace(found[0], above=not found[0].above).name if found else None
+        found = self._literals.get(name)
+        return dataclasses.replace(found, above=not found.above).name if found else None
 
     def static_literal(self, name: str) -> bool:
         """Whether `name` is a literal on a feature no segment changes."""
-        return any(p.name == name and isinstance(p, Literal) and (p.type, p.feature) in self.static for p in self.unary)
+        found = self._literals.get(name)
+        return found is not None and (found.type, found.feature) in self.static
 
     @property
     def signatures(self) -> dict[str, tuple[str, ...]]:
