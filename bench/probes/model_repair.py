@@ -17,29 +17,17 @@ from collections import Counter
 import numpy as np
 
 import jaxbridge
-from bench.ledger import on_test_seeds, seed_list
+from bench.command import CommandParser
 from jaxbridge.utils.cli import positive_int
 from jaxbridge.utils.stats import bootstrap_ci, ci_text
 
 
 def parse(argv=None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="python -m bench.probes.model_repair", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="multi_novelty", help="the env (default: %(default)s)")
-    parser.add_argument("--seeds", default="0-7", help="development seeds, FIRST-LAST (default: %(default)s)")
+    parser = CommandParser(__spec__.name, __doc__, env="multi_novelty", seeds="0-7")
     parser.add_argument("--episodes", type=positive_int, default=20, help="training tasks per rollout (default: %(default)s)")
     parser.add_argument("--rollouts", type=positive_int, default=3, help="rollouts of them recorded (default: %(default)s)")
     parser.add_argument("--tasks", type=positive_int, default=10, help="test tasks per seed and protocol (default: %(default)s)")
-    args = parser.parse_args(argv)
-    try:
-        args.seed_list = seed_list(args.seeds)
-    except ValueError:
-        parser.error(f"--seeds takes FIRST-LAST, got {args.seeds!r}")
-    if not args.seed_list or on_test_seeds(args.seed_list):
-        parser.error(f"--seeds {args.seeds}: development seeds only (the test sets are the study's)")
-    if args.env not in jaxbridge.env_names():
-        parser.error(f"--env {args.env!r}: one of {', '.join(jaxbridge.env_names())}")
-    return args
+    return parser.parse_args(argv)
 
 
 def main(argv=None) -> int:
