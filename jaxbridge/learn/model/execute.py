@@ -11,6 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from envs_jax.base import NoveltyEnv, SkillCall
+from jaxbridge.core.meta_policy import same_state
 from jaxbridge.learn.model.model import LearnedModel, plan
 from jaxbridge.learn.model.segments import TaskReader
 
@@ -24,10 +25,11 @@ class PlannedEpisode:
 
 
 def _skill_step(env: NoveltyEnv, state, call: SkillCall):
-    """One env step of the running skill: (next state, the skill's end, whether the state changed)."""
+    """One env step of the running skill: (next state, the skill's end, whether the state changed by the
+    meta-policy's repeated-state test)."""
     nxt = env.step(state, env.skill_action(state, call))
     nxt = env.after_skill_step(state, nxt, call)
-    return nxt, env.skill_done(state, nxt, call), jnp.any(env.state_vector(nxt) != env.state_vector(state))
+    return nxt, env.skill_done(state, nxt, call), ~same_state(env.state_vector(nxt), env.state_vector(state))
 
 
 def _observed(env: NoveltyEnv, reader: TaskReader, state):

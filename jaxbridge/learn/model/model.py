@@ -2,7 +2,6 @@
 of a state, and plans with it (`plan`), found by A* with h_ff over the repaired grounding."""
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 from envs_jax.base import NoveltyEnv
@@ -49,12 +48,11 @@ def learn_model(env_cls: type[NoveltyEnv], segments: list[Segment]) -> LearnedMo
     grammar = grammar.with_spans(chosen)
     vocabulary = set(domain.predicates) | chosen | {p.name for p in grammar.unary if isinstance(p, Literal)} \
         | {p.name for p in grammar.relations}
-    # spans are read, never made: an operator's effects leave them out (the next plan reads them afresh)
-    spans = dataclasses.replace(grammar, unary=(), relations=(), all_at=())
     known = lambda view: frozenset(a for a in atoms(view) if a[0] in vocabulary)
     new_skills = {op.skill for op in domain.operators if not op.add and not op.delete}
-    calls = [(s, known(s.before), known(s.after), known(s.before) | spans.atoms(s.before))
-             for s in segments if s.skill in new_skills]
+    # spans are read, never made: only a precondition may use them (each plan reads them afresh)
+    calls = [(s, before, known(s.after), before | grammar.span_atoms(s.before))
+             for s in segments if s.skill in new_skills for before in [known(s.before)]]
     clusters = [c for c in cluster_effects(calls, domain) if len(c.segments) >= MIN_CALLS]
     added = [new_operator(c, k, _failures(c, calls, domain), grammar, domain.fluent_predicates) for k, c in enumerate(clusters)]
     made = {a[0] for op in added for a in op.add}

@@ -170,18 +170,32 @@ class Grammar:
                 ok = p.holds(pa, pb)
                 out += [(p.name, na[i], nb[j]) for i, j in zip(*np.nonzero(ok)) if na[i] != nb[j]]
         for p in self.all_at:
-            (places, _, at), (names, features, pos) = rows.get(p.place_type, ((), None, None)), rows.get(p.unary.type, ((), None, None))
-            if places:
-                here = SamePlace((p.place_type, p.unary.type)).holds(at, pos) if names else np.zeros((len(places), 0), bool)
-                fails = ~p.unary.holds(features) if names else np.zeros(0, bool)
+            if found := _quantified(rows, p):
+                places, at, pos, fails = found
+                here = SamePlace((p.place_type, p.unary.type)).holds(at, pos)
                 out += [(p.name, places[i]) for i in range(len(places)) if not (here[i] & fails).any()]
+        return frozenset(out) | self._span_atoms(rows)
+
+    def span_atoms(self, view: View) -> frozenset[Atom]:
+        """The atoms of the grammar's spans alone that hold in `view`."""
+        return self._span_atoms(_rows_by_type(view))
+
+    def _span_atoms(self, rows) -> frozenset[Atom]:
+        out = []
         for p in self.spans:
-            (places, _, at), (names, features, pos) = rows.get(p.place_type, ((), None, None)), rows.get(p.unary.type, ((), None, None))
-            if places:
-                fails = ~p.unary.holds(features) if names else np.zeros(0, bool)
-                ok = p.holds(at, pos if names else np.zeros((0, 3)), fails)
-                out += [(p.name, places[i], places[j]) for i, j in zip(*np.nonzero(ok))]
+            if found := _quantified(rows, p):
+                places, at, pos, fails = found
+                out += [(p.name, places[i], places[j]) for i, j in zip(*np.nonzero(p.holds(at, pos, fails)))]
         return frozenset(out)
+
+
+def _quantified(rows, p: "AllAt | Span"):
+    """(place names, their positions, the unary's objects' positions, where the unary fails) for a
+    quantified predicate over `rows` (`_rows_by_type`), None without places; no objects: nothing fails."""
+    (places, _, at), (names, features, pos) = rows.get(p.place_type, ((), None, None)), rows.get(p.unary.type, ((), None, None))
+    if not places:
+        return None
+    return (places, at, pos, ~p.unary.holds(features)) if names else (places, at, np.zeros((0, 3)), np.zeros(0, bool))
 
 
 def _rows_by_type(view: View) -> dict[str, tuple[tuple[str, ...], np.ndarray, np.ndarray]]:
