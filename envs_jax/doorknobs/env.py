@@ -281,11 +281,10 @@ class Doorknobs(NoveltyEnv):
 
     def object_names(self, spec: DoorknobsTask) -> tuple[str | None, ...]:
         # the robot, then R room slots and 2R door slots, each at its object_slot
-        first = {"room": 1, "door": 1 + self._rooms}
         names: list[str | None] = ["robby"] + [None] * (3 * self._rooms)
-        for name, kind in self.planner_problem(spec).objects.items():
-            if kind in first:
-                names[first[kind] + self.object_slot(name)] = name
+        for first, placed in ((1, [_room_name(*r) for r in spec.rooms]), (1 + self._rooms, [_door_name(*d) for d in spec.doors])):
+            for name in placed:
+                names[first + self.object_slot(name)] = name
         return tuple(names)
 
     def oracle_object(self, state: State) -> jax.Array:  # the door of the knob `features` shows
