@@ -8,7 +8,8 @@ import pytest
 import jaxbridge
 from envs_jax.base import SkillSpec
 from envs_jax.multi_novelty.tasks import BOTH, task_of
-from jaxbridge.learn.model.model import learn_model, plan
+from jaxbridge.learn.model.model import learn_model
+from jaxbridge.learn.model.planning import plan
 from jaxbridge.learn.model.segments import Segment, View
 from planner import Domain, LiftedOperator, read_domain
 

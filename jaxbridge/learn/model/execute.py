@@ -12,7 +12,8 @@ import numpy as np
 
 from envs_jax.base import NoveltyEnv, SkillCall
 from jaxbridge.core.meta_policy import same_state
-from jaxbridge.learn.model.model import LearnedModel, plan
+from jaxbridge.learn.model.model import LearnedModel
+from jaxbridge.learn.model.planning import plan
 from jaxbridge.learn.model.segments import TaskReader
 
 

@@ -1,5 +1,5 @@
 """The learned model: the planner's model repaired and extended from segments (`learn_model`), its atoms
-of a state, and plans with it (`plan`), found by A* with h_ff over the repaired grounding."""
+and its atoms of a state (planning.py plans with it)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -10,9 +10,7 @@ from jaxbridge.learn.model.operators import (Cluster, Examples, bind, cluster_ef
 from jaxbridge.learn.model.predicates import Grammar, Literal, make_grammar
 from jaxbridge.learn.model.samplers import Sampler, fit_sampler
 from jaxbridge.learn.model.segments import Segment, View
-from planner.heuristic import astar
-from planner.search import BitOperator
-from planner.strips import Atom, Domain, GroundOperator, LiftedOperator, Problem, domain_pddl, ground
+from planner.strips import Atom, Domain, LiftedOperator, domain_pddl
 
 MIN_CALLS = 2  # an effect seen once is not made an operator (a random call's accident)
 
@@ -96,15 +94,3 @@ def _samplers(env_cls: type[NoveltyEnv], operators: list[LiftedOperator], cluste
             out[op.name] = fit_sampler(calls, spec.param_low, spec.param_high)
     return out
 
-
-def plan(model: LearnedModel, view: View, goal: frozenset[Atom]) -> list[GroundOperator] | None:
-    """A plan from `view` to `goal` in the learned model (A*, h_ff), None if it has none."""
-    atoms, fluent = model.atoms(view), model.domain.fluent_predicates
-    problem = Problem(model.domain, typed_objects(view, model.domain), frozenset(a for a in atoms if a[0] not in fluent),
-                      frozenset(a for a in atoms if a[0] in fluent), goal)
-    ops = ground(problem)
-    index: dict[Atom, int] = {}
-    bits = lambda atoms: sum(1 << index.setdefault(a, len(index)) for a in sorted(atoms))
-    bit_ops = [BitOperator(bits(o.pre), bits(o.add), bits(o.delete)) for o in ops]
-    found = astar(bit_ops, bits(goal), bits(problem.init)).plan
-    return None if found is None else [ops[i] for i in found]
