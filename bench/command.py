@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 
 import jaxbridge
-from bench.ledger import on_test_seeds, seed_list
+from bench.records import on_test_seeds, seed_list
 from jaxbridge.utils.cli import ArgumentParser
 
 

@@ -17,11 +17,11 @@ change to it), its fields say so.
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import datetime
 import sys
 
+from bench.command import CommandParser
 from bench.records import RECORDS, TEST_SETS, git_commit
 
 LEDGER = RECORDS / "ledger.csv"
@@ -71,20 +71,8 @@ def seed_set(first: int, count: int) -> str:
     return f"{first}-{first + count - 1}"
 
 
-def on_test_seeds(seeds: list[int]) -> bool:
-    """Whether any of `seeds` lies in a test-seed set."""
-    return any(first <= s < first + size for first, size in TEST_SETS.items() for s in seeds)
-
-
-def seed_list(text: str) -> list[int]:
-    """FIRST-LAST (or one seed) as the list of its seeds."""
-    first, _, last = text.partition("-")
-    return list(range(int(first), int(last or first) + 1))
-
-
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.ledger", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--env", help="the env the run trained or evaluated on (required unless --spent)")
     parser.add_argument("--ran", help="the command that ran, as typed (required unless --spent)")
     parser.add_argument("--spent", metavar="SUBJECT",

@@ -33,6 +33,17 @@ CYCLES = (10, 25, 50, 100)  # the cycles the tables show, whose checkpoints the 
 SPENT = {"ours_learned_selection": ("200-231", "300-331")}
 
 
+def on_test_seeds(seeds: list[int]) -> bool:
+    """Whether any of `seeds` lies in a test-seed set."""
+    return any(first <= s < first + size for first, size in TEST_SETS.items() for s in seeds)
+
+
+def seed_list(text: str) -> list[int]:
+    """FIRST-LAST (or one seed) as the list of its seeds."""
+    first, _, last = text.partition("-")
+    return list(range(int(first), int(last or first) + 1))
+
+
 # Records written before bench/ was split by kind name their commands by the modules of then: each old
 # name's module today, so that a page shows a command that runs.
 RENAMED = {

@@ -18,6 +18,7 @@ import argparse
 import json
 import sys
 
+from bench.command import CommandParser
 from bench.records import ROOT, check_clean, git_commit, refuse, run_child
 from bench.studies import studies
 from jaxbridge.utils.cli import run_main
@@ -46,8 +47,7 @@ def command(step: tuple, args: argparse.Namespace, restarted: bool) -> list[str]
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.regenerate", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--change", help="the ledger's change for every test-seed step: what changed since each set's "
                                          "previous run (required unless --dry-run)")
     parser.add_argument("--chosen-on", help="the ledger's seeds that change was chosen on (required unless --dry-run)")

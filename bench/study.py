@@ -27,8 +27,8 @@ from pathlib import Path
 
 import jaxbridge
 from bench.command import CommandParser
-from bench.ledger import append, on_test_seeds, seed_set
-from bench.records import RECORDS, ROOT, check_clean, git_commit, machine, refuse, run_child, shown
+from bench.ledger import append, seed_set
+from bench.records import RECORDS, ROOT, check_clean, git_commit, machine, on_test_seeds, refuse, run_child, shown
 from jaxbridge.utils.files import write_atomic
 
 # The flags every study shares that do not change what it measures: left out of its command line.

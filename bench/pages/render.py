@@ -13,10 +13,10 @@ logged numbers) and bench/results.json (python -m bench.timings.table). Text out
 """
 from __future__ import annotations
 
-import argparse
 import re
 import sys
 
+from bench.command import CommandParser
 from bench.pages import claims, fix_length, multi_novelty, performance, results, selection_history
 from bench.records import ROOT
 
@@ -48,8 +48,7 @@ def stale_blocks(text: str) -> list[str]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.pages.render", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("--check", action="store_true", help="change nothing; exit 1 where a doc differs from its records")
     args = parser.parse_args(argv)
     stale = {}

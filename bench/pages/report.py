@@ -6,18 +6,17 @@ its figure where --figure says.
 """
 from __future__ import annotations
 
-import argparse
 import shutil
 import sys
 from pathlib import Path
 
 import jaxbridge
+from bench.command import CommandParser
 from bench.pages.results import approach_row, authors_row, authors_rows, by_approach, read_csv, table_header
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.pages.report", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.add_argument("experiment", type=Path, help="an experiment directory written by train.py")
     parser.add_argument("--figure", type=Path, default=None, help="also copy its curves.png here")
     args = parser.parse_args(argv)

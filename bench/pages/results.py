@@ -10,8 +10,7 @@ from pathlib import Path
 import numpy as np
 
 import jaxbridge
-from bench.ledger import on_test_seeds
-from bench.records import CYCLES, DISTRACTOR_ENVS, ENVS, PRESET_RUN, RECORDS, current_command
+from bench.records import CYCLES, DISTRACTOR_ENVS, ENVS, PRESET_RUN, RECORDS, current_command, on_test_seeds
 from envs_jax import VARIANTS
 from jaxbridge.utils import stats
 

@@ -8,12 +8,12 @@ why), so the table judges nothing: it shows what each run measured, in the order
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import json
 import sys
 
+from bench.command import CommandParser
 from bench.records import ENVS, DISTRACTOR_ENVS, RECORDS, ROOT, _git
 from bench.pages.results import by_approach, seed_values
 from bench.study import csv_text
@@ -54,8 +54,7 @@ def history() -> list[dict]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.pages.selection_history", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(__spec__.name, __doc__)
     parser.parse_args(argv)
     rows = history()
     if not rows:

@@ -19,7 +19,7 @@ CHILD = """
 import json, sys
 from jaxbridge.utils import compile_cache
 compile_cache.enable(sys.argv[1])
-from bench.ledger import seed_list
+from bench.records import seed_list
 from bench.timings.training import measure_cycles
 import jaxbridge
 config = jaxbridge.make_config(sys.argv[2], approach=sys.argv[3], seeds=seed_list(sys.argv[4]), cycles=2)
