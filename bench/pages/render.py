@@ -1,12 +1,13 @@
-"""Render the docs' numbers from the committed records: every block between
+"""Render the docs' numbers from the committed records: every generated block of README.md, docs/RESULTS.md,
+docs/PERFORMANCE.md and the pages under docs/results/ (DOCS) is rebuilt from docs/results/ (bench.studies.paper,
+bench.timings.quickstart, bench.timings.suite), docs/results/authors*.csv (the authors' logged numbers) and
+bench/results.json (python -m bench.timings.table). A block is what lies between
 
     <!-- generated: NAME -->
     ...
     <!-- end generated: NAME -->
 
-in README.md, docs/RESULTS.md, docs/PERFORMANCE.md and docs/results/generalisation.md is rebuilt from
-docs/results/ (bench.studies.paper, bench.timings.quickstart, bench.timings.suite), docs/results/authors*.csv (the authors'
-logged numbers) and bench/results.json (python -m bench.timings.table). Text outside the blocks is left as it is.
+and text outside the blocks is left as it is.
 
     python -m bench.pages.render            # rewrite the blocks
     python -m bench.pages.render --check    # exit 1, naming the blocks, where a doc differs from its records
