@@ -1,6 +1,6 @@
-"""The one parser of a bench command, a study's, a probe's or a timing's: `python -m MODULE` and the module's
-docstring, --env where the command takes one (a registered env), --seeds FIRST-LAST where it trains on seeds,
-then the command's own flags.
+"""The one parser of a bench command, a study's, a page's, a probe's or a timing's: `python -m MODULE` and
+the module's docstring, --env where the command takes one (a registered env, or one of a study's), --seeds
+FIRST-LAST where it trains on seeds, then the command's own flags.
 
     parser = CommandParser(__spec__.name, __doc__, env="coffee", seeds="0-7")
     parser.add_argument("--cycles", type=int, default=40)
@@ -20,18 +20,21 @@ from jaxbridge.utils.cli import ArgumentParser
 
 
 class CommandParser(ArgumentParser):  # errors in one line, exit 2, as train.py's
-    def __init__(self, module: str, doc: str | None, *, env: str | None = None, seeds: str | None = None,
-                 test_seeds: bool = False):
+    def __init__(self, module: str, doc: str | None, *, env: str | None = None, envs: tuple[str, ...] | None = None,
+                 env_help: str = "a registered env", seeds: str | None = None, test_seeds: bool = False):
+        """--env defaults to `env` among every registered env, or is required among `envs`; --seeds defaults to `seeds`."""
         super().__init__(prog=f"python -m {module}", description=doc,
                          formatter_class=argparse.RawDescriptionHelpFormatter)
         self.test_seeds = test_seeds
-        if env:
-            names = jaxbridge.env_names()
-            self.add_argument("--env", default=env, choices=names, metavar="ENV",
-                              help=f"a registered env: {', '.join(names)} (default: %(default)s)")
+        if env or envs:
+            names = list(envs or jaxbridge.env_names())
+            self.add_argument("--env", default=env, required=env is None, choices=names, metavar="ENV",
+                              help=f"{env_help}: {', '.join(names)}" + (" (default: %(default)s)" if env else ""))
         if seeds:
-            self.add_argument("--seeds", default=seeds, help="development seeds, FIRST-LAST (default: %(default)s; the "
-                                                             "test-seed sets are the studies')")
+            self.add_argument("--seeds", default=seeds, help=(
+                "consecutive seeds, FIRST-LAST (default: %(default)s); a test-seed set or part of one needs --change "
+                "and --chosen-on (its ledger row)" if test_seeds else
+                "development seeds, FIRST-LAST (default: %(default)s; the test-seed sets are the studies')"))
 
     def parse_args(self, args=None, namespace=None) -> argparse.Namespace:
         parsed = super().parse_args(args, namespace)

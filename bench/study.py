@@ -85,12 +85,8 @@ class Study:
         return f"bench.studies.{self.name}"
 
     def parser(self) -> argparse.ArgumentParser:
-        parser = CommandParser(self.module, self.doc, test_seeds=True)  # its own --env and --seeds: a study's
-        if len(self.envs) > 1:
-            parser.add_argument("--env", required=True, choices=self.envs, help=self.env_help)
-        parser.add_argument("--seeds", default=self.seeds,
-                            help="consecutive seeds, FIRST-LAST (default: %(default)s); a test-seed set or part of one "
-                                 "needs --change and --chosen-on (its ledger row)")
+        parser = CommandParser(self.module, self.doc, envs=self.envs if len(self.envs) > 1 else None,
+                               env_help=self.env_help, seeds=self.seeds, test_seeds=True)
         parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
         parser.add_argument("--runs", type=Path, default=ROOT / "runs" / self.name,
                             help=f"where the runs and finished steps go (default: runs/{self.name})")

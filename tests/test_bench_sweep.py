@@ -55,6 +55,8 @@ def test_a_probes_seeds_are_development_seeds_read_as_a_range_and_anything_else_
     with pytest.raises(SystemExit):
         parser.parse_args(["--env", "no_such_env"])
     assert "invalid choice: 'no_such_env'" in capsys.readouterr().err
-    study = CommandParser("bench.studies.example", "study", test_seeds=True)
-    study.add_argument("--seeds", default="200-231")
-    assert study.parse_args([]).seed_list == list(range(200, 232))  # a study may: it writes the ledger's row
+    study = CommandParser("bench.studies.example", "study", envs=("coffee", "doorknobs"), seeds="200-231", test_seeds=True)
+    assert study.parse_args(["--env", "coffee"]).seed_list == list(range(200, 232))  # a study may: it writes the ledger's row
+    with pytest.raises(SystemExit):
+        study.parse_args([])  # a study's --env is required among its envs
+    assert "the following arguments are required: --env" in capsys.readouterr().err
