@@ -21,8 +21,10 @@ from jaxbridge.utils.cli import ArgumentParser
 
 class CommandParser(ArgumentParser):  # errors in one line, exit 2, as train.py's
     def __init__(self, module: str, doc: str | None, *, env: str | None = None, envs: tuple[str, ...] | None = None,
-                 env_help: str = "a registered env", seeds: str | None = None, test_seeds: bool = False):
-        """--env defaults to `env` among every registered env, or is required among `envs`; --seeds defaults to `seeds`."""
+                 env_help: str = "a registered env", seeds: str | None = None, test_seeds: bool = False,
+                 dirty_records: str | None = None):
+        """--env defaults to `env` among every registered env, or is required among `envs`; --seeds defaults to
+        `seeds`; --allow-dirty where the command writes records, those of uncommitted code to `dirty_records`."""
         super().__init__(prog=f"python -m {module}", description=doc,
                          formatter_class=argparse.RawDescriptionHelpFormatter)
         self.test_seeds = test_seeds
@@ -35,6 +37,10 @@ class CommandParser(ArgumentParser):  # errors in one line, exit 2, as train.py'
                 "consecutive seeds, FIRST-LAST (default: %(default)s); a test-seed set or part of one needs --change "
                 "and --chosen-on (its ledger row)" if test_seeds else
                 "development seeds, FIRST-LAST (default: %(default)s; the test-seed sets are the studies')"))
+        if dirty_records:
+            self.add_argument("--allow-dirty", action="store_true", help=(
+                f"run on code with uncommitted changes (a local try): the records go to {dirty_records}/, not docs/"
+                + ("; on test seeds the ledger row is written all the same" if test_seeds else "")))
 
     def parse_args(self, args=None, namespace=None) -> argparse.Namespace:
         parsed = super().parse_args(args, namespace)

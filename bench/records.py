@@ -112,6 +112,14 @@ def check_clean(module: str, allow_dirty: bool, during: bool = False) -> list[st
 DIRTY_RECORDS = ROOT / "runs" / "dirty_records"  # where --allow-dirty puts the records of uncommitted code
 
 
+def record_path(module: str, path: Path, allow_dirty: bool) -> Path:
+    """Where a timing's record goes, said before it measures: `path`; or, where the code has uncommitted changes
+    (refused, exit 2, unless `allow_dirty`), its place under DIRTY_RECORDS (never docs/)."""
+    if not check_clean(module, allow_dirty):
+        return path
+    return DIRTY_RECORDS / (path.relative_to(RECORDS) if path.is_relative_to(RECORDS) else path.name)
+
+
 def git_commit(changed: list[str] | None = None) -> str:
     """The checkout's full commit, with "+changes" when its code differs from it (`changed`: the
     `uncommitted` paths, when already read)."""

@@ -86,14 +86,11 @@ class Study:
 
     def parser(self) -> argparse.ArgumentParser:
         parser = CommandParser(self.module, self.doc, envs=self.envs if len(self.envs) > 1 else None,
-                               env_help=self.env_help, seeds=self.seeds, test_seeds=True)
+                               env_help=self.env_help, seeds=self.seeds, test_seeds=True, dirty_records="RUNS/records")
         parser.add_argument("--cycles", type=int, default=100, help="learning cycles (default: %(default)s, the paper's)")
         parser.add_argument("--runs", type=Path, default=ROOT / "runs" / self.name,
                             help=f"where the runs and finished steps go (default: runs/{self.name})")
         parser.add_argument("--records", type=Path, default=RECORDS, help="where the records go (default: docs/results)")
-        parser.add_argument("--allow-dirty", action="store_true",
-                            help="run on code with uncommitted changes (a local try): the records go to RUNS/records, "
-                                 "not docs/; on test seeds the ledger row is written all the same")
         parser.add_argument("--change", help="on test seeds: what changed since this seed set's previous run of the "
                                              "study and why, in a line (\"first run\" for the first); the ledger's")
         parser.add_argument("--chosen-on", help="on test seeds: the seeds the change was chosen on, e.g. \"development "

@@ -1,8 +1,10 @@
 """bench.probes.sweep's reliability line (the figures docs/TUNING.md's evidence commands print) and its
-config overrides; the probes' and timings' shared parser (bench/command.py) and its development seeds."""
+config overrides; the probes' and timings' shared parser (bench/command.py) and its development seeds; where a
+timing's record of uncommitted code goes."""
 import numpy as np
 import pytest
 
+from bench import records
 from bench.command import CommandParser
 from bench.probes.sweep import reliability, swept_config, sweep_parser
 
@@ -60,3 +62,14 @@ def test_a_probes_seeds_are_development_seeds_read_as_a_range_and_anything_else_
     with pytest.raises(SystemExit):
         study.parse_args([])  # a study's --env is required among its envs
     assert "the following arguments are required: --env" in capsys.readouterr().err
+
+
+def test_a_timings_record_of_uncommitted_code_goes_under_runs_dirty_records_and_only_with_allow_dirty(monkeypatch, capsys):
+    record = records.RECORDS / "coffee" / "profile.json"
+    monkeypatch.setattr(records, "uncommitted", lambda: ["bench/timings/example.py"])
+    assert records.record_path("bench.timings.example", record, True) == records.DIRTY_RECORDS / "coffee" / "profile.json"
+    with pytest.raises(SystemExit) as refused:
+        records.record_path("bench.timings.example", record, False)
+    assert refused.value.code == 2 and "try it out with --allow-dirty" in capsys.readouterr().err
+    monkeypatch.setattr(records, "uncommitted", lambda: [])
+    assert records.record_path("bench.timings.example", record, False) == record

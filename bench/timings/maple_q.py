@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from bench.command import CommandParser
-from bench.records import DIRTY_RECORDS, RECORDS, ROOT, check_clean, git_commit, machine, shown
+from bench.records import DIRTY_RECORDS, RECORDS, check_clean, git_commit, machine, record_path, shown
 from bench.timings.update_parts import measure as update_parts
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.learn.devices import SeedMesh, select_devices
@@ -151,7 +151,7 @@ def with_ratios(measured: dict) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = CommandParser(__spec__.name, __doc__, env="doorknobs")
+    parser = CommandParser(__spec__.name, __doc__, env="doorknobs", dirty_records=shown(DIRTY_RECORDS))
     parser.add_argument("--approaches", default="ours,maple_q", help="comma-separated, the first the reference "
                         "(default: %(default)s)")
     parser.add_argument("--warmup", type=int, default=5, help="cycles before the parts are timed (default: %(default)s)")
@@ -160,10 +160,8 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, help="write the record here instead (default: docs/results/ENV/"
                         "maple_q_profile.json, which PERFORMANCE renders, for the default --approaches; with others "
                         "the record is only printed)")
-    parser.add_argument("--allow-dirty", action="store_true",
-                        help=f"profile code with uncommitted changes: the record goes to {DIRTY_RECORDS.relative_to(ROOT)}/, not docs/")
     args = parser.parse_args(argv)
-    changed = check_clean("bench.timings.maple_q", args.allow_dirty)
+    path = record_path("bench.timings.maple_q", args.out or RECORDS / args.env / "maple_q_profile.json", args.allow_dirty)
     measured = profile(args.env, args.approaches.split(","), args.warmup, args.repeats, args.fill)
     record = {"env": args.env, "seed": 0, "figures": measured, "ratio_to_first": with_ratios(measured),
               "commit": git_commit(check_clean("bench.timings.maple_q", args.allow_dirty, during=True)),
@@ -174,9 +172,6 @@ def main(argv=None) -> int:
         print("bench.timings.maple_q: other approaches than PERFORMANCE's record: printed only (--out FILE keeps it)",
               file=sys.stderr)
         return 0
-    path = args.out or RECORDS / args.env / "maple_q_profile.json"
-    if changed:  # a record of uncommitted code never lands in docs/
-        path = DIRTY_RECORDS / args.env / path.name
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(record, indent=2) + "\n")
     print(f"bench.timings.maple_q: -> {shown(path)}", file=sys.stderr)

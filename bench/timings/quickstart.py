@@ -18,7 +18,8 @@ import tempfile
 from pathlib import Path
 
 from bench.command import CommandParser
-from bench.records import DIRTY_RECORDS, ENVS, QUICKSTART, ROOT, check_clean, cold_cache, git_commit, machine, run_child
+from bench.records import (DIRTY_RECORDS, ENVS, QUICKSTART, check_clean, cold_cache, git_commit, machine, record_path,
+                           run_child, shown)
 
 
 def measure(env: str, out: Path) -> dict:
@@ -37,18 +38,16 @@ def measure(env: str, out: Path) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = CommandParser(__spec__.name, __doc__)
+    parser = CommandParser(__spec__.name, __doc__, dirty_records=shown(DIRTY_RECORDS))
     parser.add_argument("--envs", default=",".join(ENVS), help="comma-separated envs (default: all three)")
     parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
                         help="train into DIR/ENV and keep the runs (default: a temporary directory, removed)")
-    parser.add_argument("--allow-dirty", action="store_true",
-                        help=f"time code with uncommitted changes: the record goes to {DIRTY_RECORDS.relative_to(ROOT)}/, not docs/")
     args = parser.parse_args(argv)
     envs = args.envs.split(",")
     unknown = [e for e in envs if e not in ENVS]
     if unknown:
         parser.error(f"unknown env {', '.join(unknown)}; choose from {', '.join(ENVS)}")
-    record = DIRTY_RECORDS / QUICKSTART.name if check_clean("bench.timings.quickstart", args.allow_dirty) else QUICKSTART
+    record = record_path("bench.timings.quickstart", QUICKSTART, args.allow_dirty)
     record.parent.mkdir(parents=True, exist_ok=True)
     records = json.loads(record.read_text()) if record.is_file() else {}
     for env in envs:

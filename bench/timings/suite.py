@@ -16,19 +16,16 @@ import sys
 import time
 
 from bench.command import CommandParser
-from bench.records import DIRTY_RECORDS, ROOT, SUITE, SUITE_CLAIMS, check_clean, git_commit, machine
+from bench.records import DIRTY_RECORDS, ROOT, SUITE, SUITE_CLAIMS, check_clean, git_commit, machine, record_path, shown
 
 
 def main(argv=None) -> int:
-    parser = CommandParser(__spec__.name, __doc__)
+    parser = CommandParser(__spec__.name, __doc__, dirty_records=shown(DIRTY_RECORDS))
     parser.add_argument("--claims", action="store_true",
                         help="time the claim tests (python -m pytest -m claims) instead of the default suite")
-    parser.add_argument("--allow-dirty", action="store_true",
-                        help=f"time code with uncommitted changes: the record goes to {DIRTY_RECORDS.relative_to(ROOT)}/, not docs/")
     args = parser.parse_args(argv)
     command, path = (["-m", "pytest", "-m", "claims"], SUITE_CLAIMS) if args.claims else (["-m", "pytest"], SUITE)
-    if check_clean("bench.timings.suite", args.allow_dirty):
-        path = DIRTY_RECORDS / path.name
+    path = record_path("bench.timings.suite", path, args.allow_dirty)
     start = time.perf_counter()
     proc = subprocess.run([sys.executable, *command], cwd=ROOT, capture_output=True, text=True)
     wall = time.perf_counter() - start
