@@ -6,7 +6,8 @@ import pytest
 
 from bench import records
 from bench.command import CommandParser
-from bench.probes.sweep import reliability, swept_config, sweep_parser
+from bench.probes.sweep import reliability, swept_config
+from bench.timings.training import overrides_parser
 
 
 def test_the_sweeps_reliability_figures_count_late_dips_and_low_means():
@@ -24,7 +25,7 @@ def test_the_sweeps_reliability_figures_count_late_dips_and_low_means():
 
 
 def test_bench_overrides_are_read_as_train_py_sweep_reads_them_and_bad_ones_are_argparse_errors(capsys):
-    parser = sweep_parser("bench.probes.sweep", "probe", "doorknobs", "0-0", 1)
+    parser = overrides_parser("bench.probes.sweep", "probe", "doorknobs", "0-0", 1)
     args = parser.parse_args(["feature_noise=0", "loop_guard=false", "hidden_sizes=64x16", "env_quirks=raw_offsets"])
     config, changes = swept_config(args)
     assert changes == {"feature_noise": 0.0, "loop_guard": False, "hidden_sizes": (64, 16), "env_quirks": ("raw_offsets",)}

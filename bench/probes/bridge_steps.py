@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from bench.probes.decisions import greedy_test_rollout
-from bench.probes.sweep import sweep_parser, swept_config
+from bench.probes.sweep import swept_config
+from bench.timings.training import overrides_parser
 from envs_jax.base import ACTOR_BRIDGE
 from jaxbridge.learn.devices import SeedMesh, select_devices
 from jaxbridge.learn.online import Cycle
@@ -43,7 +44,7 @@ def report(setup, learners, config, cycle: int) -> None:
 
 
 def main() -> None:
-    parser = sweep_parser(__spec__.name, __doc__, "coffee", "0-31", 100)
+    parser = overrides_parser(__spec__.name, __doc__, "coffee", "0-31", 100)
     parser.add_argument("--at", default="25,50", help="cycles to report at before the last (--cycles), "
                         "comma-separated (default: %(default)s)")
     args = parser.parse_args()

@@ -10,7 +10,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from bench.probes.sweep import print_digits, sweep_parser, swept_config, train_seeds
+from bench.probes.sweep import print_digits, swept_config, train_seeds
+from bench.timings.training import overrides_parser
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.learn.q_bridge import encode
 
@@ -27,7 +28,7 @@ def greedy_test_rollout(setup, learners, num_seeds: int, num_tests: int):
 
 
 def main() -> None:
-    parser = sweep_parser(__spec__.name, __doc__, "coffee", "0-7", 40)
+    parser = overrides_parser(__spec__.name, __doc__, "coffee", "0-7", 40)
     parser.add_argument("--max-failed", type=int, default=3, help="failed tasks printed per seed")
     parser.add_argument("--max-decisions", type=int, default=12, help="decisions printed per failed task")
     args = parser.parse_args()

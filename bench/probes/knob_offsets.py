@@ -16,7 +16,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from bench.probes.sweep import print_digits, reliability, sweep_parser, swept_config, train_seeds
+from bench.probes.sweep import print_digits, reliability, swept_config, train_seeds
+from bench.timings.training import overrides_parser
 from envs_jax.doorknobs.env import MOVE_THROUGH_DOOR, MOVE_TO_DOOR, OPEN_DOOR
 from envs_jax.doorknobs.maps import KNOB_TARGET, OPEN_TOLERANCE
 from jaxbridge.learn.q_bridge import encode
@@ -43,7 +44,7 @@ def probe(env, net, q_params, features: jax.Array) -> tuple[jax.Array, jax.Array
 
 
 def main() -> None:
-    parser = sweep_parser(__spec__.name, __doc__, "doorknobs", "0-7", 100)
+    parser = overrides_parser(__spec__.name, __doc__, "doorknobs", "0-7", 100)
     args = parser.parse_args()
     if args.env != "doorknobs":
         parser.error("the probe's grid is Doorknobs' doorways: --env doorknobs")

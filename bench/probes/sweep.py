@@ -11,23 +11,13 @@ import time
 import numpy as np
 
 import jaxbridge
-from bench.command import CommandParser
-from bench.timings.training import config_override, measure_cycles, with_overrides
+from bench.timings.training import measure_cycles, overrides_parser, with_overrides
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.learn.devices import select_devices
 from jaxbridge.learn.setup import Setup
 
 # Issue #19's reliability bars: the mean from cycle 40 on, and every single seed from cycle 50 on.
 LATE_MEAN, SEED_FLOOR = 0.95, 0.8
-
-
-def sweep_parser(module: str, doc: str, env: str, seeds: str, cycles: int) -> CommandParser:
-    """The probes' parser (--env, --seeds) with what the sweep-like probes share: how long, and config overrides."""
-    parser = CommandParser(module, doc, env=env, seeds=seeds)
-    parser.add_argument("--cycles", type=int, default=cycles, help="cycles (default: %(default)s)")
-    parser.add_argument("overrides", nargs="*", type=config_override,
-                        help="TrainConfig fields as name=value (booleans: true/false)")
-    return parser
 
 
 def swept_config(args) -> tuple[TrainConfig, dict]:
@@ -50,7 +40,7 @@ def print_digits(seeds: list[int], rates: np.ndarray) -> None:
 
 
 def main() -> None:
-    parser = sweep_parser(__spec__.name, __doc__, "light_switch_door", "8-23", 40)
+    parser = overrides_parser(__spec__.name, __doc__, "light_switch_door", "8-23", 40)
     parser.add_argument("--save", help="also save the rates, float[seeds, cycles], to this .npy file")
     parser.add_argument("--bar", type=float, default=0.95,
                         help="a threshold on the mean test solve rate: the cycles from 50 on at or above it, and "

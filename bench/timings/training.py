@@ -92,6 +92,16 @@ def config_override(text: str) -> tuple[str, object]:
         raise argparse.ArgumentTypeError(str(err)) from None
 
 
+def overrides_parser(module: str, doc: str, env: str, seeds: str, cycles: int) -> CommandParser:
+    """The parser of a command that trains seeds with config overrides (this timing, bench.probes.sweep and the
+    probes built on it): --env, --seeds, --cycles and TrainConfig fields as name=value."""
+    parser = CommandParser(module, doc, env=env, seeds=seeds)
+    parser.add_argument("--cycles", type=int, default=cycles, help="cycles (default: %(default)s)")
+    parser.add_argument("overrides", nargs="*", type=config_override,
+                        help="TrainConfig fields as name=value, e.g. feature_noise=0 (booleans: true/false)")
+    return parser
+
+
 def with_overrides(config: TrainConfig, overrides: list[tuple[str, object]]) -> tuple[TrainConfig, dict]:
     """`config` with the (field, value) overrides applied, and those changes."""
     changes = dict(overrides)
@@ -116,15 +126,12 @@ def report(config: TrainConfig, run: dict) -> float:
 
 
 def main() -> None:
-    parser = CommandParser(__spec__.name, __doc__, env="light_switch_door", seeds="0-7")
-    parser.add_argument("--cycles", type=int, default=100, help="cycles (default: %(default)s)")
+    parser = overrides_parser(__spec__.name, __doc__, "light_switch_door", "0-7", 100)
     parser.add_argument("--devices", type=device_count_arg, default="auto", help="as train.py (default: auto)")
     parser.add_argument("--seed-block", type=int, default=1, help="as train.py (default: %(default)s)")
     parser.add_argument("--approach", default="ours", help="which approach, or a comma-separated list trained a "
                         "cycle of each in turn, each one's steady-state cost then given as a ratio to the first's "
                         "(default: %(default)s)")
-    parser.add_argument("overrides", nargs="*", type=config_override,
-                        help="TrainConfig fields as name=value, e.g. feature_noise=0")
     args = parser.parse_args()
     seeds_over = select_devices(args.devices)
     print(f"jax {jax.__version__}, seeds over {describe(seeds_over)} device(s), seed block {args.seed_block}")
