@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -62,7 +63,10 @@ class PlanTable:
     op_pre: jax.Array  # uint32[O, W]: fluent preconditions, packed like states
     op_skill: jax.Array  # int32[O]
     op_slot: jax.Array  # int32[O]
-    op_valid: jax.Array  # bool[O]
+    op_valid: jax.Array  # bool[O]: a ground operator of the env's model (padding and learned ones are not)
+    # A learned model's device part (jaxbridge/core/learned_atoms.ModelTable: its invented atoms and its
+    # operators' samplers); None for the env's own model, whose programs then hold no trace of it.
+    model: Any = None
 
 
 def table_shape(states: int, operators: int, num_atoms: int) -> PlanTable:
@@ -88,6 +92,14 @@ class PlanLookup:
 
 _HOST_PLANNERS: dict[int, HostPlanner] = {}
 _UIDS = itertools.count(1)
+
+
+def register_planner(planner) -> int:
+    """The uid a table names `planner` by (anything with `decide(state) -> PolicyEntry`) for the host
+    fallback."""
+    uid = next(_UIDS)
+    _HOST_PLANNERS[uid] = planner
+    return uid
 
 
 @dataclass
@@ -126,8 +138,7 @@ def compile_task(env, spec, max_states: int | None = None) -> CompiledTask:
     planner.calls = 0
 
     words = num_words(env.num_atoms)
-    uid = next(_UIDS)
-    _HOST_PLANNERS[uid] = planner
+    uid = register_planner(planner)
     table = PlanTable(
         uid=np.int32(uid),
         goal_key=bits_to_words(planner.goal, words),
@@ -150,7 +161,8 @@ def _pad(x: np.ndarray, n: int, fill) -> np.ndarray:
 
 
 def stack_tables(tasks: list[CompiledTask]) -> PlanTable:
-    """Pad every table to the largest one and stack them on a leading task axis."""
+    """Pad every table to the largest one and stack them on a leading task axis (a learned model's part
+    comes at its declared capacities: stacked as it is)."""
     tables = [t.table for t in tasks]
     s = max(t.state_keys.shape[0] for t in tables)
     o = max(t.op_pre.shape[0] for t in tables)

@@ -2,7 +2,8 @@
 
 Per env step, for a whole batch of episodes (any mix of seeds and tasks):
 
-1. observe: abstract the state; the episode ends at the goal or the horizon.
+1. observe: abstract the state (a learned model adds its invented atoms); the episode ends at the goal
+   or the horizon.
 2. plan: the planner looks up the next operator of an optimal plan from the current abstract state
    (in-graph table; host planner on a miss, only on steps where some episode misses).
 3. planner turn: when its skill has finished, the planner checks that the atoms its model predicted
@@ -33,6 +34,7 @@ from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Brid
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.episode import (BRIDGE, PLANNER, Controls, Decision, Episode, EpisodeResult, StepRecord, observation,
                                     observation_size)
+from jaxbridge.core.learned_atoms import invented_holds, sampled_param
 from jaxbridge.core.tasks import TaskArrays
 from planner.tables import (PlanLookup, PlanTable, batched_plan_lookup, holds_all, num_words, pack_atoms,
                             table_lookup)
@@ -43,30 +45,37 @@ def same_state(a: jax.Array, b: jax.Array) -> jax.Array:
     return jnp.all(jnp.abs(a - b) <= 1e-8 + 1e-5 * jnp.abs(b))
 
 
-def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.Array, plan_length: int = 0) -> Episode:
+def start_episode(env: NoveltyEnv, controls: Controls, task: Any, horizon: jax.Array, plan_length: int = 0,
+                  words: int | None = None) -> Episode:
     """The planner starts in control with a plan from the initial state (without a planner, the bridge
-    starts). `plan_length`: the plan states kept with `plan_progress`."""
+    starts). `plan_length`: the plan states kept with `plan_progress`; `words`: of a packed abstract state
+    (default: the env's atoms; a learned model's tables have more)."""
     state = env.reset(task)
+    words = num_words(env.num_atoms) if words is None else words
     vec = env.state_vector(state)
     zero = jnp.int32(0)
     return Episode(env_state=state, stuck_state=state, stalled_skill=jnp.int32(-1), t=zero, horizon=jnp.int32(horizon),
                    done=jnp.bool_(False), success=jnp.bool_(False),
                    control=jnp.int32(PLANNER if controls.planner else BRIDGE),
-                   call=idle_call(), expected=jnp.zeros(num_words(env.num_atoms), jnp.uint32),
+                   call=idle_call(), expected=jnp.zeros(words, jnp.uint32),
                    prev_vec=vec, planner_stepped=jnp.bool_(False), bridge_vec=vec,
                    planner_calls=jnp.int32(int(controls.planner)), table_misses=zero, bridge_decisions=zero,
                    stuck_events=zero, decision_vec=vec, decision_skill=jnp.int32(-1),
                    no_op_skills=jnp.zeros(env.num_skills, bool),
-                   plan_keys=jnp.zeros((plan_length, num_words(env.num_atoms)), jnp.uint32),
+                   plan_keys=jnp.zeros((plan_length, words), jnp.uint32),
                    plan_ops=jnp.full(plan_length, -1, jnp.int32), plan_at=zero, new_plan=jnp.bool_(True))
 
 
-def observe(env: NoveltyEnv, ep: Episode):
-    """Abstract the state and close the episode at the goal or the horizon."""
+def observe(env: NoveltyEnv, ep: Episode, table: PlanTable | None = None):
+    """Abstract the state (with a learned model's table, its invented atoms after the env's) and close the
+    episode at the goal or the horizon."""
     goal = env.goal_reached(ep.env_state)
     ep = ep.replace(success=ep.success | (~ep.done & goal), done=ep.done | goal | (ep.t >= ep.horizon))
     need_plan = ~ep.done & (ep.control == PLANNER) & ~ep.call.running
-    return ep, pack_atoms(env.abstract(ep.env_state)), need_plan
+    atoms = env.abstract(ep.env_state)
+    if table is not None and table.model is not None:
+        atoms = jnp.concatenate([atoms, invented_holds(table.model, env.objects(ep.env_state))])
+    return ep, pack_atoms(atoms), need_plan
 
 
 def applicable_ops(env: NoveltyEnv, table: PlanTable, atoms: jax.Array, state: Any) -> jax.Array:
@@ -134,7 +143,10 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, plan: PlanLooku
 
     op = jnp.maximum(plan.op, 0)
     skill = table.op_skill[op]
-    planner_call = SkillCall(skill=skill, slot=table.op_slot[op], param=env.param_from_uniform(skill, u_param),
+    param = env.param_from_uniform(skill, u_param)
+    if table.model is not None:  # a learned operator's sampler gives its parameter
+        param = jnp.where(table.model.op_sampled[op], sampled_param(table.model, op, env.objects(state)), param)
+    planner_call = SkillCall(skill=skill, slot=table.op_slot[op], param=param,
                              running=jnp.bool_(True), steps=jnp.int32(0))
     abandoned = ep.call.replace(running=ep.call.running & ~stuck)
     ep = ep.replace(
@@ -319,7 +331,7 @@ def planner_step(env: NoveltyEnv, controls: Controls, tables: PlanTable, episode
                  param_uniforms: jax.Array, host_planner: bool = True) -> PlannerTurn:
     """Steps 1-3 on a batch: observe (with `plan_progress`, the bridge's hand-back at a later plan state),
     look the plan up, the planner's turn."""
-    episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes)
+    episodes, packed, need_plan = jax.vmap(partial(observe, env))(episodes, tables)
     progressed = jnp.zeros_like(need_plan)
     if controls.plan_progress:
         episodes, progressed = jax.vmap(partial(hand_back_at_progress, controls.resume_plan))(episodes, packed)
@@ -374,7 +386,8 @@ def rollout(policy: MetaPolicy, batch: TaskArrays, keys: jax.Array, max_steps: i
     num_episodes = horizons.shape[0]
     groups = jnp.zeros(num_episodes, jnp.int32) if groups is None else groups
     plan_length = max_steps + 1 if controls.plan_progress else 0  # no plan is longer than the episode
-    episodes = jax.vmap(partial(start_episode, env, controls, plan_length=plan_length))(tasks, horizons)
+    words = tables.goal_key.shape[-1]
+    episodes = jax.vmap(partial(start_episode, env, controls, plan_length=plan_length, words=words))(tasks, horizons)
 
     def step(episodes: Episode, randomness):
         param_uniforms, choice_bits, bridge_keys = randomness  # float32[B], uint32[B], key[B]
