@@ -82,6 +82,77 @@ def test_the_gate_rows_model_plans_past_a_closed_gate_and_its_pddl_reads_back():
         {op.name: (set(op.pre), set(op.add), set(op.delete), op.skill, op.slot_param) for op in model.domain.operators}
 
 
+DIAL_WINDOW = 0.1
+
+
+class DialRow:
+    """A row of cells with a gate in cell 1 that opens while its dial is within 0.1 of the gate's own
+    target (each task draws one): the model knows moves, and TurnDial only as touching the gate, where it
+    sets the dial to its parameter."""
+
+    object_types = {"robot": (), "cell": (), "gate": ("dial", "target")}
+    skills = (SkillSpec("MoveRobot"), SkillSpec("TurnDial", 0.0, 1.0))
+    domain = Domain("dial-row", ("robot", "cell", "gate"), {
+        "RobotInCell": ("robot", "cell"), "Adjacent": ("cell", "cell"), "GateInCell": ("gate", "cell"), "Touched": ("gate",)}, (
+        GateRow.domain.operators[0],
+        LiftedOperator("TurnDial", (("?robot", "robot"), ("?cell", "cell"), ("?gate", "gate")),
+                       (("GateInCell", "?gate", "?cell"), ("RobotInCell", "?robot", "?cell")), (("Touched", "?gate"),), (),
+                       "TurnDial", "?gate")))
+
+
+def _dial_view(cell: int, dial: float, target: float, touched: bool) -> View:
+    view = _view(cell, False, 0.0)
+    features = view.features.copy()
+    features[-1] = (dial, target)
+    given = view.given | {("GateInCell", "gate0", f"cell{GATE_CELL}")} | ({("Touched", "gate0")} if touched else set())
+    return View(view.names, view.types, features, view.position, frozenset(given))
+
+
+def _dial_row_segments(rng: np.random.Generator, calls: int = 400) -> list[Segment]:
+    segments = []
+    for _ in range(calls):
+        cell = GATE_CELL if rng.random() < 0.5 else int(rng.integers(CELLS))
+        dial, target, touched = float(rng.random()), float(rng.uniform(0.3, 0.7)), bool(rng.random() < 0.5)
+        before = _dial_view(cell, dial, target, touched)
+        if rng.random() < 0.5:
+            goal = int(np.clip(cell + rng.choice([-1, 1]), 0, CELLS - 1))
+            blocked = goal > cell == GATE_CELL and abs(dial - target) > DIAL_WINDOW
+            segments.append(Segment("MoveRobot", f"cell{goal}", 0.0, True, before,
+                                    _dial_view(cell if blocked else goal, dial, target, touched)))
+        else:
+            turn = float(rng.random())
+            after = _dial_view(cell, turn, target, True) if cell == GATE_CELL else before
+            segments.append(Segment("TurnDial", "gate0", turn, True, before, after))
+    return segments
+
+
+@pytest.fixture(scope="module")
+def dial_row_model():
+    return learn_model(DialRow, _dial_row_segments(np.random.default_rng(2)))
+
+
+def test_a_move_out_of_the_gates_cell_needs_its_dial_within_a_band_of_its_target_read_off_the_stalls(dial_row_model):
+    grammar = dial_row_model.grammar
+    needs = {a[0] for op in dial_row_model.domain.operators if op.skill == "MoveRobot" for a in op.pre} - set(DialRow.domain.predicates)
+    bands = [p.unary for p in grammar.all_at if p.name in needs]
+    # one predicate, the dial's distance to the gate's own target, with a width at the window's edge
+    assert [(b.feature_name, b.other_name, b.above) for b in bands] == [("dial", "target", False)]
+    assert 0.08 < bands[0].threshold < 0.12
+
+
+def test_turning_the_dial_a_skill_the_model_knows_learns_the_effect_a_move_needs_and_where_to_turn(dial_row_model):
+    band = next(a[0] for op in dial_row_model.domain.operators if op.skill == "MoveRobot" for a in op.pre
+                if a[0].startswith("cell_all_gate"))
+    turns = [op for op in dial_row_model.learned_operators if op.skill == "TurnDial" and any(a[0] == band for a in op.add)]
+    # the model's effect stays: made, or (a dial turned again) already there
+    assert turns and all(("Touched", op.slot_param) in op.add + op.pre for op in turns)
+    found = plan(dial_row_model, _dial_view(0, 0.0, 0.5, False), frozenset({("RobotInCell", "robby", f"cell{CELLS - 1}")}))
+    assert [op.skill for op in found] == ["MoveRobot", "TurnDial", "MoveRobot", "MoveRobot"]
+    sampler = dial_row_model.samplers[found[1].name]
+    for target in (0.35, 0.5, 0.65):  # the turn follows the gate's target
+        assert abs(sampler(_dial_view(GATE_CELL, 0.0, target, False), "gate0") - target) < DIAL_WINDOW / 2
+
+
 @pytest.fixture(scope="module")
 def multi_novelty_model():
     return jaxbridge.learn_model("multi_novelty", jaxbridge.record_segments("multi_novelty", seed=0))

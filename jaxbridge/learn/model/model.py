@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from envs_jax.base import NoveltyEnv
 from jaxbridge.learn.model.operators import (Cluster, Examples, bind, cluster_effects, lift, model_bindings,
                                              never_worked, new_operator, repair, typed_objects)
-from jaxbridge.learn.model.predicates import Grammar, Literal, make_grammar
+from jaxbridge.learn.model.predicates import Data, Grammar, Literal, make_grammar, read_data, stall_cuts
 from jaxbridge.learn.model.samplers import Sampler, fit_sampler
 from jaxbridge.learn.model.segments import Segment, View
 from planner.strips import Atom, Domain, LiftedOperator, domain_pddl
@@ -37,40 +37,67 @@ class LearnedModel:
 
 def learn_model(env_cls: type[NoveltyEnv], segments: list[Segment]) -> LearnedModel:
     """The env's model repaired and extended from `segments` (see operators.py)."""
-    domain, grammar = env_cls.domain, make_grammar(segments, env_cls.object_types)
+    domain, data = env_cls.domain, read_data(segments, env_cls.object_types)
+    calls = {op.name: _model_calls(op, segments, domain) for op in domain.operators if op.add or op.delete}
+    grammar = make_grammar(data, _cuts(calls, make_grammar(data), data))
     cache: dict[int, frozenset[Atom]] = {}
     atoms = lambda view, base=grammar: cache.setdefault(id(view), view.given | base.atoms(view))
-    examples = {op.name: _model_examples(op, segments, domain, atoms) for op in domain.operators if op.add or op.delete}
+    examples = {name: _examples(found, atoms) for name, found in calls.items()}
     repaired = [variant for op in domain.operators if op.name in examples for variant in repair(op, examples[op.name], grammar)]
     chosen = {a[0] for op in repaired for a in op.pre} - set(domain.predicates)
-    grammar = grammar.with_spans(chosen)
-    vocabulary = set(domain.predicates) | chosen | {p.name for p in grammar.unary if isinstance(p, Literal)} \
-        | {p.name for p in grammar.relations}
-    known = lambda view: frozenset(a for a in atoms(view) if a[0] in vocabulary)
+    # a stall's threshold stays where a repair chose it (the atoms known so far are a superset)
+    grammar = make_grammar(data, grammar.cuts(chosen)).with_spans(chosen)
+    relations = {p.name for p in grammar.relations}
+    literals = {p.name for p in grammar.unary if isinstance(p, Literal)}
     new_skills = {op.skill for op in domain.operators if not op.add and not op.delete}
+    # a skill the model knows is learned only for what a repaired precondition needs: its other changes
+    # (an arm that rises after a twist) would tie the variant to preconditions no operator makes
+    vocabulary = lambda skill: set(domain.predicates) | chosen | relations | (literals if skill in new_skills else set())
+    known = lambda view, skill: frozenset(a for a in atoms(view) if a[0] in vocabulary(skill))
     # spans are read, never made: only a precondition may use them (each plan reads them afresh)
-    calls = [(s, before, known(s.after), before | grammar.span_atoms(s.before))
-             for s in segments if s.skill in new_skills for before in [known(s.before)]]
-    clusters = [c for c in cluster_effects(calls, domain) if len(c.segments) >= MIN_CALLS]
-    added = [new_operator(c, k, _failures(c, calls, domain), grammar, domain.fluent_predicates) for k, c in enumerate(clusters)]
+    effects = [(s, before, after, before | grammar.span_atoms(s.before)) for s in segments
+               for before, after in [(known(s.before, s.skill), known(s.after, s.skill))]
+               if s.skill in new_skills or any(a[0] in chosen for a in after - before)]
+    clusters = [c for c in cluster_effects(effects, domain) if len(c.segments) >= MIN_CALLS]
+    # numbered on from the repaired variants (MoveRobot_0, MoveRobot_1): no two operators share a name
+    added = [new_operator(c, len(repaired) + k, _failures(c, effects, domain), grammar, domain.fluent_predicates)
+             for k, c in enumerate(clusters)]
     made = {a[0] for op in added for a in op.add}
     repaired = [never_worked(op, examples[op.name], grammar, made) if op.name in examples else op for op in repaired]
     used = {a[0] for op in repaired + added for a in op.pre + op.add + op.delete}
     predicates = dict(domain.predicates) | {n: s for n, s in grammar.signatures.items() if n in used}
     types = tuple(dict.fromkeys(domain.types + tuple(env_cls.object_types)))
     learned = Domain(f"{domain.name}-learned", types, predicates, tuple(repaired + added))
-    return LearnedModel(learned, grammar, _samplers(env_cls, added, clusters), domain.operators)
+    return LearnedModel(learned, grammar, _samplers(env_cls, added, clusters, grammar), domain.operators)
 
 
-def _model_examples(op: LiftedOperator, segments: list[Segment], domain: Domain, atoms) -> Examples:
-    """The calls of `op`'s skill its model preconditions allowed, lifted: positive where its effects followed."""
-    examples = Examples()
+def _model_calls(op: LiftedOperator, segments: list[Segment], domain: Domain) -> list[tuple[Segment, dict[str, str], bool]]:
+    """The calls of `op`'s skill its model preconditions allowed: (call, variable -> object, whether its
+    effects followed)."""
+    out = []
     for segment in (s for s in segments if s.skill == op.skill):
         for binding in model_bindings(op, segment, domain):
             after = segment.after.given
-            worked = bind(op.add, binding) <= after and not bind(op.delete, binding) & after
-            (examples.positive if worked else examples.negative).append(
-                lift(atoms(segment.before), {o: v for v, o in binding.items()}))
+            out.append((segment, binding, bind(op.add, binding) <= after and not bind(op.delete, binding) & after))
+    return out
+
+
+def _cuts(calls: dict[str, list], grammar: Grammar, data: Data) -> dict:
+    """The thresholds the model operators' stalls ask for (`stall_cuts`), of every operator that both
+    worked and stalled."""
+    cuts: dict = {}
+    for found in calls.values():
+        if any(w for *_, w in found) and not all(w for *_, w in found):
+            for measure, values in stall_cuts([(s.before, b, w) for s, b, w in found], grammar, data).items():
+                cuts.setdefault(measure, set()).update(values)
+    return cuts
+
+
+def _examples(calls: list[tuple[Segment, dict[str, str], bool]], atoms) -> Examples:
+    """A model operator's calls lifted: positive where its effects followed."""
+    examples = Examples()
+    for segment, binding, worked in calls:
+        (examples.positive if worked else examples.negative).append(lift(atoms(segment.before), {o: v for v, o in binding.items()}))
     return examples
 
 
@@ -85,12 +112,25 @@ def _failures(cluster: Cluster, calls, domain: Domain) -> list[frozenset[Atom]]:
     return out
 
 
-def _samplers(env_cls: type[NoveltyEnv], operators: list[LiftedOperator], clusters: list[Cluster]) -> dict[str, Sampler]:
+def _samplers(env_cls: type[NoveltyEnv], operators: list[LiftedOperator], clusters: list[Cluster],
+              grammar: Grammar) -> dict[str, Sampler]:
     skills, out = {s.name: s for s in env_cls.skills}, {}
     for op, cluster in zip(operators, clusters):
         spec = skills[op.skill]
         if spec.param_low < spec.param_high:
-            calls = [(segment, binding.get(op.slot_param)) for segment, binding in cluster.segments]
-            out[op.name] = fit_sampler(calls, spec.param_low, spec.param_high)
+            variable, input_type, links = _input(op, grammar, env_cls.object_types)
+            calls = [(segment, binding.get(variable)) for segment, binding in cluster.segments]
+            out[op.name] = fit_sampler(calls, spec.param_low, spec.param_high, input_type, links)
     return out
 
+
+def _input(op: LiftedOperator, grammar: Grammar, object_types) -> tuple[str | None, str | None, tuple]:
+    """The variable a sampler reads (the first with features whose literals the effects change, else the
+    slot's), its type where it is not the slot's, and the relations of the preconditions tying it to the slot."""
+    changed = {a[1] for a in op.add + op.delete if grammar.is_literal(a[0])}
+    variable = next((v for v, t in op.params if v in changed and object_types.get(t)), op.slot_param)
+    if variable == op.slot_param:
+        return variable, None, ()
+    links = tuple((grammar.relation(a[0]), a[1] == op.slot_param) for a in op.pre
+                  if grammar.relation(a[0]) and set(a[1:]) == {variable, op.slot_param})
+    return variable, dict(op.params)[variable], links

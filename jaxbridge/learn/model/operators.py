@@ -9,7 +9,9 @@ for what the bridge's skills did that the model does not know.
   by what they changed, lifted over the objects they changed and where the robot was; a group's preconditions are what it
   deleted, the planner model's atoms and the relations true before every call of it, and each changing
   literal on the acted-on object that was true before every success and false before some call of the
-  skill on an object of its type that changed nothing (what a failure says was missing).
+  skill on an object of its type that changed nothing (what a failure says was missing), and each
+  literal on a feature its effects change that held before every call (where the change started: the
+  operator's sampler was fitted there and nowhere else).
 """
 from __future__ import annotations
 
@@ -167,12 +169,16 @@ def new_operator(cluster: Cluster, index: int, failures: list[frozenset[Atom]], 
     always = frozenset.intersection(*cluster.befores)
     slot = cluster.params[0][0] if cluster.segments[0][0].slot_object else None
 
+    changed = {(a[1], f) for a in cluster.add | cluster.delete for f in grammar.reads(a[0])}
+
     def needed(atom: Atom) -> bool:
         if atom in cluster.delete or atom[0] in model_fluents or grammar.kind(atom[0]) >= 1 and len(atom) == 3:
             return True  # what it uses up, where the robot is, relations and spans
-        if not grammar.is_literal(atom[0]) or grammar.static_literal(atom[0]) or atom[1:] != (slot,):
+        if not grammar.is_literal(atom[0]) or grammar.static_literal(atom[0]):
             return False
-        return any(atom not in failed for failed in failures)  # a failure lacked it
+        if any((atom[1], f) in changed for f in grammar.reads(atom[0])):
+            return True  # where the feature it changes started: its sampler knows no other start
+        return atom[1:] == (slot,) and any(atom not in failed for failed in failures)  # a failure lacked it
 
     pre = [a for a in sorted(always) if needed(a)]
     pre += _binding(sorted(a for a in always if grammar.kind(a[0]) == 0 and a[0] not in model_fluents), pre, cluster.params)

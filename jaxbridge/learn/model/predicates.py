@@ -33,6 +33,14 @@ def _token(x: float) -> str:
     return f"{x:.3g}".replace("-", "m").replace(".", "p")
 
 
+Measure = tuple[str, int, "int | None"]  # (type, feature, other feature): a feature, or a band's distance
+
+
+def measure_values(features: np.ndarray, feature: int, other: int | None) -> np.ndarray:
+    """float[n] for rows float32[n, W]: the feature, or its distance to the other feature (a band)."""
+    return features[:, feature] if other is None else np.abs(features[:, feature] - features[:, other])
+
+
 @dataclass(frozen=True)
 class Literal:
     type: str
@@ -41,16 +49,25 @@ class Literal:
     threshold: float
     above: bool
     binary: bool  # the feature takes two values: the name needs no threshold
+    other: int | None = None  # a band: the feature's distance to this other feature of the object
+    other_name: str = ""
 
     @property
     def name(self) -> str:
+        if self.other is not None:
+            side = "beyond" if self.above else "within"
+            return f"{self.type}_{self.feature_name}_{side}_{_token(self.threshold)}_of_{self.other_name}"
         if self.binary:
             return f"{self.type}_{'' if self.above else 'not_'}{self.feature_name}"
         return f"{self.type}_{self.feature_name}_{'above' if self.above else 'below'}_{_token(self.threshold)}"
 
+    @property
+    def measure(self) -> Measure:
+        return self.type, self.feature, self.other
+
     def holds(self, features: np.ndarray) -> np.ndarray:
         """bool[n] for rows float32[n, W] of this type."""
-        above = features[:, self.feature] > self.threshold
+        above = measure_values(features, self.feature, self.other) > self.threshold
         return above if self.above else ~above
 
 
@@ -122,6 +139,16 @@ class Grammar:
         spans = tuple(dict.fromkeys(Span(p.place_type, p.unary) for p in self.all_at if p.name in chosen))
         return dataclasses.replace(self, spans=spans)
 
+    def cuts(self, chosen: set[str]) -> dict[Measure, set[float]]:
+        """The thresholds of the literals the predicates named in `chosen` read (quantified or paired)."""
+        out: dict[Measure, set[float]] = {}
+        for p in self.unary + self.all_at:
+            if p.name in chosen:
+                unary = p.unary if isinstance(p, AllAt) else p
+                for lit in (unary.guard, unary.literal) if isinstance(unary, Either) else (unary,):
+                    out.setdefault(lit.measure, set()).add(lit.threshold)
+        return out
+
     @functools.cached_property
     def _kinds(self) -> dict[str, int]:
         composite = {p.name: 1 + isinstance(p, Either) for p in self.unary} | {p.name: 1 for p in self.relations}
@@ -136,6 +163,13 @@ class Grammar:
         of literals or a quantified literal, 3 a quantified pair (the learner prefers the simplest)."""
         return self._kinds.get(name, 0)
 
+    def relation(self, name: str) -> SamePlace | Before | None:
+        return self._relations.get(name)
+
+    @functools.cached_property
+    def _relations(self) -> dict[str, SamePlace | Before]:
+        return {p.name: p for p in self.relations}
+
     def is_literal(self, name: str) -> bool:
         return name in self._literals
 
@@ -144,10 +178,15 @@ class Grammar:
         found = self._literals.get(name)
         return dataclasses.replace(found, above=not found.above).name if found else None
 
-    def static_literal(self, name: str) -> bool:
-        """Whether `name` is a literal on a feature no segment changes."""
+    def reads(self, name: str) -> set[int]:
+        """The features the literal `name` reads (none: not a literal)."""
         found = self._literals.get(name)
-        return found is not None and (found.type, found.feature) in self.static
+        return {f for f in (found.feature, found.other) if f is not None} if found else set()
+
+    def static_literal(self, name: str) -> bool:
+        """Whether `name` is a literal on features no segment changes."""
+        found = self._literals.get(name)
+        return found is not None and all((found.type, f) in self.static for f in (found.feature, found.other) if f is not None)
 
     @property
     def signatures(self) -> dict[str, tuple[str, ...]]:
@@ -208,38 +247,129 @@ def _rows_by_type(view: View) -> dict[str, tuple[tuple[str, ...], np.ndarray, np
     return out
 
 
+@dataclass(frozen=True)
+class Data:
+    """What the segments show: each measure's values on every object of its type in every view, the
+    features no segment changes, and the type pairs with two objects at one place somewhere."""
+
+    object_types: dict[str, tuple[str, ...]]
+    values: dict[Measure, np.ndarray]
+    static: frozenset[tuple[str, int]]
+    shared: frozenset[tuple[str, str]]
+
+    @functools.cached_property
+    def distinct(self) -> dict[Measure, np.ndarray]:
+        """Each measure's distinct values, sorted."""
+        return {m: np.unique(v) for m, v in self.values.items()}
+
+
+def read_data(segments: list[Segment], object_types: dict[str, tuple[str, ...]]) -> Data:
+    """The measures of the segments' views: every feature, and a band from each changing feature with
+    many values to each feature of its object that no segment changes (a key near its target)."""
+    views = [s.before for s in segments] + [s.after for s in segments]
+    values, static = {}, set()
+    for t, feature_names in object_types.items():
+        rows = np.concatenate([v.features[[i for i, ty in enumerate(v.types) if ty == t and v.names[i]]] for v in views])
+        for f in range(len(feature_names)):
+            values[t, f, None] = rows[:, f]
+            if not any(not np.array_equal(_column(s.before, t, f), _column(s.after, t, f)) for s in segments):
+                static.add((t, f))
+        for f, g in itertools.permutations(range(len(feature_names)), 2):
+            if (t, f) not in static and (t, g) in static and len(np.unique(rows[:, f])) > MANY_VALUES:
+                values[t, f, g] = measure_values(rows, f, g)
+    placed = [t for t in list(object_types)[1:]]  # the robot (the first type) takes part in no relation
+    shared = set().union(*(_sharing(v, placed) for v in views))
+    return Data(object_types, values, frozenset(static), frozenset(shared))
+
+
 def _thresholds(values: np.ndarray) -> list[float]:
+    """A threshold between each two of a few distinct values, the quartiles of many."""
     distinct = np.unique(values)
     if len(distinct) <= MANY_VALUES:
         return list((distinct[1:] + distinct[:-1]) / 2)
     return list(np.unique(np.quantile(values, [0.25, 0.5, 0.75])))
 
 
-def make_grammar(segments: list[Segment], object_types: dict[str, tuple[str, ...]]) -> Grammar:
-    """The grammar's predicates over the types and feature values the segments show: literals with their
-    thresholds, guards on the features no segment changes, relations and quantified atoms between the
-    types that share a place somewhere."""
-    views = [s.before for s in segments] + [s.after for s in segments]
-    robot = next(iter(object_types))
-    literals, static = [], set()
-    for t, feature_names in object_types.items():
-        for f, fname in enumerate(feature_names):
-            values = np.concatenate([v.features[[i for i, ty in enumerate(v.types) if ty == t and v.names[i]], f] for v in views])
-            changed = any(not np.array_equal(_column(s.before, t, f), _column(s.after, t, f)) for s in segments)
-            cuts = _thresholds(values) if values.size else []
-            if not changed:
-                static.add((t, f))
-            literals += [Literal(t, f, fname, float(c), above, len(cuts) == 1) for c in cuts for above in (True, False)]
-    guards = [g for g in literals if (g.type, g.feature) in static and g.binary and not g.above]
+def make_grammar(data: Data, cuts: dict[Measure, set[float]] | None = None) -> Grammar:
+    """The grammar's predicates over the measures `data` shows: literals at each feature's thresholds and
+    at `cuts` (a band's only thresholds), guards on the features no segment changes, relations and
+    quantified atoms between the types that share a place somewhere."""
+    cuts, literals = cuts or {}, []
+    for (t, f, g), values in data.values.items():
+        names = data.object_types[t]
+        seen = _thresholds(values) if g is None else []
+        every = sorted(set(seen) | set(cuts.get((t, f, g), ())))
+        binary = len(seen) == 1 and len(every) == 1
+        literals += [Literal(t, f, names[f], float(c), above, binary, g, names[g] if g is not None else "")
+                     for c in every for above in (True, False)]
+    guards = [g for g in literals if g.other is None and (g.type, g.feature) in data.static and g.binary and not g.above]
     either = [Either(g, lit) for g in guards for lit in literals
-              if lit.type == g.type and (lit.type, lit.feature) not in static]
+              if lit.type == g.type and (lit.type, lit.feature) not in data.static]
     unary = tuple(literals + either)
-    placed = [t for t in object_types if t != robot]
-    shared = set().union(*(_sharing(v, placed) for v in views))
+    placed = [t for t in list(data.object_types)[1:]]
     pairs = list(itertools.permutations(placed, 2)) + [(t, t) for t in placed]
     relations = tuple(r for a, b in pairs for r in (SamePlace((a, b)), Before((a, b))))
-    all_at = tuple(AllAt(a, u) for a, b in sorted(shared) for u in unary if u.type == b)
-    return Grammar(unary, relations, all_at, robot, frozenset(static))
+    all_at = tuple(AllAt(a, u) for a, b in sorted(data.shared) for u in unary if u.type == b)
+    return Grammar(unary, relations, all_at, next(iter(data.object_types)), data.static)
+
+
+def stall_cuts(calls: list[tuple[View, dict[str, str], bool]], grammar: Grammar, data: Data) -> dict[Measure, set[float]]:
+    """The thresholds an operator's stalls ask for, from its calls (state before, variable -> object,
+    whether its effects followed): for the successes (all, or those where a relation between its objects
+    holds, or those where it does not: the sides of `repair`'s case split) and each measure on one of its
+    objects, or over the objects at one's place, the midpoint between the successes' largest value and
+    the next value seen above it (and between their smallest and the one below), where a stall lies
+    beyond it. Quartiles rarely fall where an effect starts (a key within 0.1 of its target)."""
+    table = [(_extremes(view, binding, grammar, data), _relations(view, binding, grammar), worked)
+             for view, binding, worked in calls]
+    pos, neg = [t for t in table if t[2]], [t for t in table if not t[2]]
+    relations = set().union(set(), *(t[1] for t in pos))
+    subsets = [pos] + [[t for t in pos if (r in t[1]) == side] for r in sorted(relations) for side in (True, False)]
+    cuts: dict[Measure, set[float]] = {}
+    for subset in (s for s in subsets if s):
+        for key in set().union(*(t[0] for t in subset)):
+            low = min(t[0][key][0] for t in subset if key in t[0])
+            high = max(t[0][key][1] for t in subset if key in t[0])
+            values, measure = data.distinct[key[1]], key[1]
+            above, below = values[values > high], values[values < low]
+            if above.size and any(key in t[0] and t[0][key][1] > (high + above[0]) / 2 for t in neg):
+                cuts.setdefault(measure, set()).add(float((high + above[0]) / 2))
+            if below.size and any(key in t[0] and t[0][key][0] < (low + below[-1]) / 2 for t in neg):
+                cuts.setdefault(measure, set()).add(float((low + below[-1]) / 2))
+    return cuts
+
+
+def _extremes(view: View, binding: dict[str, str], grammar: Grammar, data: Data) -> dict:
+    """{(variable, measure): (smallest, largest) value} of each measure on the variable's object, and
+    {((variable, "at"), measure): ...} over the objects at its place (where a type shares places)."""
+    rows, out = _rows_by_type(view), {}
+    for v, o in binding.items():
+        if o not in view.names:
+            continue
+        i = view.names.index(o)
+        t, here = view.types[i], view.position[i][None]
+        for measure in data.distinct:
+            if measure[0] == t:
+                x = measure_values(view.features[i][None], measure[1], measure[2])[0]
+                out[v, measure] = (x, x)
+            elif (t, measure[0]) in data.shared and measure[0] in rows:
+                _, features, pos = rows[measure[0]]
+                x = measure_values(features[SamePlace((t, t)).holds(here, pos)[0]], measure[1], measure[2])
+                if x.size:
+                    out[(v, "at"), measure] = (x.min(), x.max())
+    return out
+
+
+def _relations(view: View, binding: dict[str, str], grammar: Grammar) -> frozenset[Atom]:
+    """The grammar's relations between the binding's objects that hold in `view`, over its variables."""
+    index = {v: view.names.index(o) for v, o in binding.items() if o in view.names}
+    out = []
+    for (a, i), (b, j) in itertools.permutations(index.items(), 2):
+        for p in grammar.relations:
+            if p.types == (view.types[i], view.types[j]) and view.names[i] != view.names[j] and \
+                    p.holds(view.position[i][None], view.position[j][None])[0, 0]:
+                out.append((p.name, a, b))
+    return frozenset(out)
 
 
 def _column(view: View, t: str, f: int) -> np.ndarray:

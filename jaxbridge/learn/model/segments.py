@@ -2,7 +2,7 @@
 in, read through the env contract (the object view, `object_names`, the planner's atoms).
 
 A segment is one call of a skill (by the planner or the bridge): its skill, the planner object its slot
-names, its parameter, and the `View` before and after. The model learner reads nothing else.
+names, its parameter, the `View` before and after, and how many env steps it took. The model learner reads nothing else.
 """
 from __future__ import annotations
 
@@ -39,6 +39,7 @@ class Segment:
     by_bridge: bool  # the bridge chose it (else the planner's plan did)
     before: View
     after: View
+    steps: int = 1  # env steps the call took
 
 
 class TaskReader:
@@ -87,6 +88,7 @@ def segments_from_records(env: NoveltyEnv, specs: list, records) -> list[Segment
             if t + 1 < live.shape[0]:
                 k = int(skill[t, b])
                 segments.append(Segment(env.skill_names[k], reader.slot_objects.get((k, int(slot[t, b]))),
-                                        float(param[t, b]), bool(actor[t, b] == ACTOR_BRIDGE), view(start), view(t + 1)))
+                                        float(param[t, b]), bool(actor[t, b] == ACTOR_BRIDGE), view(start), view(t + 1),
+                                        int(t - start + 1)))
             start = None
     return segments
