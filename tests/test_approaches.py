@@ -14,7 +14,7 @@ from envs_jax.light_switch_door.env import LightSwitchDoor
 from envs_jax.precision import ExactKey
 from jaxbridge.core.bridges import PurePlanningBridge, RandomBridge
 from jaxbridge.core.episode import observation
-from jaxbridge.learn.approaches import (APPROACHES, KNOWN, LOW_LEVEL, PLAN_REPAIR, SELECTION, SIGNATURE, BridgeKind,
+from jaxbridge.learn.approaches import (APPROACHES, KNOWN, LOW_LEVEL, MODEL_REPAIR, PLAN_REPAIR, SELECTION, SIGNATURE, BridgeKind,
                                        get_approach)
 from jaxbridge.learn.q_bridge import QBridge, encode
 from jaxbridge.core.config import TrainConfig
@@ -67,7 +67,8 @@ def cycle_program(approach: str, host_planner: bool = True) -> Counter:
 def test_approach_names_are_unique_and_each_resolves_to_itself():
     """A name or label given twice would silently replace an approach (the registries are dicts merged
     into KNOWN) or merge two runs' lines in the figures and tables, which tell approaches apart by label."""
-    entries = [(key, a) for group in (APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION, SIGNATURE) for key, a in group.items()]
+    entries = [(key, a) for group in (APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION, SIGNATURE, MODEL_REPAIR)
+               for key, a in group.items()]
     assert len(KNOWN) == len(entries) and all(key == a.name for key, a in entries)
     assert len({a.label for _, a in entries}) == len(entries)
     assert all(get_approach(name) is approach for name, approach in KNOWN.items())

@@ -34,7 +34,7 @@ from envs_jax.base import (ACTOR_BRIDGE, ACTOR_CALL_PLANNER, ACTOR_PLANNER, Brid
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.episode import (BRIDGE, PLANNER, Controls, Decision, Episode, EpisodeResult, StepRecord, observation,
                                     observation_size)
-from jaxbridge.core.learned_atoms import invented_holds, sampled_param
+from jaxbridge.core.learned_atoms import invented_holds, learned_call
 from jaxbridge.core.tasks import TaskArrays
 from planner.tables import (PlanLookup, PlanTable, batched_plan_lookup, holds_all, num_words, pack_atoms,
                             table_lookup)
@@ -142,12 +142,14 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, plan: PlanLooku
     start_op = needs_op & ~stuck
 
     op = jnp.maximum(plan.op, 0)
-    skill = table.op_skill[op]
+    skill, slot = table.op_skill[op], table.op_slot[op]
+    if table.model is not None:  # a learned model's operator: a code of its skill, slot and sampler
+        learned = learned_call(table.model, plan.op, env.objects(state))
+        skill, slot = jnp.where(learned.learned, learned.skill, skill), jnp.where(learned.learned, learned.slot, slot)
     param = env.param_from_uniform(skill, u_param)
-    if table.model is not None:  # a learned operator's sampler gives its parameter
-        param = jnp.where(table.model.op_sampled[op], sampled_param(table.model, op, env.objects(state)), param)
-    planner_call = SkillCall(skill=skill, slot=table.op_slot[op], param=param,
-                             running=jnp.bool_(True), steps=jnp.int32(0))
+    if table.model is not None:
+        param = jnp.where(learned.learned & learned.sampled, learned.param, param)
+    planner_call = SkillCall(skill=skill, slot=slot, param=param, running=jnp.bool_(True), steps=jnp.int32(0))
     abandoned = ep.call.replace(running=ep.call.running & ~stuck)
     ep = ep.replace(
         call=tree_where(start_op, planner_call, abandoned),

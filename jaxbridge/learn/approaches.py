@@ -35,6 +35,7 @@ class Approach:
     description: str = ""
     algorithm: str = ""  # the low-level baselines' brax trainer ("ppo" or "sac")
     per_signature: bool = False  # a Q-network of its own per failure signature (learn/signature_q.py)
+    repairs_model: bool = False  # the planner plans with a model learned from the cycles' skill calls (run/model_repair.py)
 
     @property
     def learns(self) -> bool:
@@ -124,7 +125,16 @@ SIGNATURE = {a.name: a for a in (
              "ours with one Q-network that sees the failure signature as one-hots beside the features"),
 )}
 
-KNOWN = {**APPROACHES, **LOW_LEVEL, **PLAN_REPAIR, **SELECTION, **SIGNATURE}
+# The bridge's experience into the planner's model (issue 76; docs/design/model_learning.md): ours, and
+# between cycles the planner's model relearned from every skill call so far (its stalls, the bridge's
+# fixes), so that its plans compose fixes and the bridge acts only where they stall. Not among "all".
+MODEL_REPAIR = {a.name: a for a in (
+    Approach("ours_model_repair", "ours, model repair", BridgeKind.Q, Controls(),
+             "ours with the planner's model repaired and extended from the skill calls of the cycles so far",
+             repairs_model=True),
+)}
+
+KNOWN = {**APPROACHES, **LOW_LEVEL, **PLAN_REPAIR, **SELECTION, **SIGNATURE, **MODEL_REPAIR}
 
 
 def get_approach(name: str) -> Approach:

@@ -65,9 +65,10 @@ def _by_seed(tree, seeds: int):
 
 def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     """One seed's cycle: (learner state, its training TaskArrays, its test TaskArrays, its Hyper) -> (learner
-    state, CycleMetrics of scalars), against the learner contract (learn/learner.py). The same computation
-    for every seed and setting. Without `host_planner` its rollouts leave states missing from the plan
-    tables unplanned (meta_policy.rollout): exact only where the metrics report no table miss."""
+    state, (CycleMetrics of scalars, the training episodes' StepRecords where the approach repairs its model
+    from them, else None)), against the learner contract (learn/learner.py). The same computation for every
+    seed and setting. Without `host_planner` its rollouts leave states missing from the plan tables
+    unplanned (meta_policy.rollout): exact only where the metrics report no table miss."""
     config, approach, test, learning = setup.config, setup.approach, setup.test, setup.learner
     controls = setup.controls
     train_env, test_env = setup.train_env, setup.test_env  # the task batches' envs, with the config's quirks
@@ -115,7 +116,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
             train_env_steps=result.steps.sum(), train_decisions=decisions, test_env_steps=tested.steps.sum(),
             epsilon=eps, loss=loss, q_abs_max=q_abs_max, buffer_size=learning.stored(learner),
             table_misses=result.table_misses.sum() + tested.table_misses.sum())
-        return learner, metrics
+        return learner, (metrics, records if approach.repairs_model else None)
 
     return seed_cycle
 
@@ -139,8 +140,10 @@ class Cycle:
         tasks = _by_seed((setup.train.arrays, setup.test.arrays), config.num_seeds)
         if len(settings) > 1:  # every setting trains and tests on the seeds' tasks
             tasks = jax.tree.map(lambda x: np.concatenate([x] * len(settings)), tasks)
-        hypers = jax.tree.map(lambda *v: np.repeat(np.stack(v), config.num_seeds), *map(Hyper.of, settings))
-        self._inputs = self.seeds.place((*tasks, hypers))
+        self._hypers = jax.tree.map(lambda *v: np.repeat(np.stack(v), config.num_seeds), *map(Hyper.of, settings))
+        self._inputs = self.seeds.place((*tasks, self._hypers))
+        self.repairs_model = setup.approach.repairs_model
+        self.records = None  # the last cycle's training StepRecords [slots, T, episodes] (repairs_model)
         self._real = self.seeds.real()
         # No buffer donation: the state before a cycle must stay valid, so that Ctrl-C or a numerical
         # fault during a cycle can still checkpoint the last good one (and a cycle can be run again).
@@ -154,7 +157,12 @@ class Cycle:
         self._tables_only = self._compile(False)
         self._with_host = None  # compiled on the first cycle that meets a state missing from a table
 
-    def run(self, learners: Any, host_planner: bool) -> tuple[Any, CycleMetrics]:
+    def retask(self, train: TaskArrays, test: TaskArrays) -> None:
+        """Every slot's training and test tasks from now on (leading axis: slots), e.g. planned with a
+        model learned since: the program compiles again where their shapes changed."""
+        self._inputs = self.seeds.place((train, test, self._hypers))
+
+    def run(self, learners: Any, host_planner: bool) -> tuple[Any, tuple[CycleMetrics, Any]]:
         """One cycle by one of the two programs (traceable): without the host planner, exact only where
         the metrics report no table miss; or with it."""
         if host_planner and self._with_host is None:
@@ -163,12 +171,14 @@ class Cycle:
         return program(self._real, learners, *self._inputs)
 
     def __call__(self, learners: Any) -> tuple[Any, CycleMetrics]:
-        updated, metrics = self.run(learners, host_planner=False)
-        if not np.asarray(self.seeds.unpad(metrics.table_misses)).any():
-            return updated, metrics
+        if not self.repairs_model:  # a learned model's plans leave its table at once: straight to the host
+            updated, (metrics, _) = self.run(learners, host_planner=False)
+            if not np.asarray(self.seeds.unpad(metrics.table_misses)).any():
+                return updated, metrics
         # Some episode needed the host planner: the same cycle again from the same state, with it (every
         # process sees the same gathered metrics, so all take this branch together).
-        return self.run(learners, host_planner=True)
+        updated, (metrics, self.records) = self.run(learners, host_planner=True)
+        return updated, metrics
 
 
 @struct.dataclass
@@ -192,6 +202,8 @@ def make_train(setup: Setup) -> Callable[..., TrainOutput]:
     config = setup.config
     if setup.approach.low_level:
         raise ValueError(f"{config.approach}: the low-level baselines train with brax's own loop, not make_train")
+    if setup.approach.repairs_model:
+        raise ValueError(f"{config.approach}: its model is relearned on the host between cycles, not in make_train")
     seed_cycle = make_seed_cycle(setup, host_planner=False)
     tasks = _by_seed((setup.train.arrays, setup.test.arrays), config.num_seeds)
     init = jax.vmap(setup.learner.init)
@@ -201,7 +213,8 @@ def make_train(setup: Setup) -> Callable[..., TrainOutput]:
 
         def cycle(learner, _):  # the barriers keep the per-seed program the one a plain run compiles
             learner, inputs = jax.lax.optimization_barrier((learner, (train_tasks, test_tasks, hyper)))
-            return jax.lax.optimization_barrier(seed_cycle(learner, *inputs))
+            learner, (metrics, _) = jax.lax.optimization_barrier(seed_cycle(learner, *inputs))
+            return learner, metrics
 
         return jax.lax.scan(cycle, learner, None, length=config.cycles)
 

@@ -100,10 +100,6 @@ class Checkpointer:
                             checkpoint_record(config, done.histories[i], self.elapsed()), keep=config.keep_cycles)
         self.saved = done.cycles
 
-    def save_if_behind(self, done: Done) -> None:
-        if done.cycles > self.saved:
-            self.save(done)
-
 
 def write_run_files(group: RunGroup, done: Done, elapsed_s: float, writable: bool = True) -> list[dict | None]:
     """Each run's summary of the cycles completed (None before any), and (where this process writes and

@@ -19,6 +19,7 @@ from jaxbridge.run import checkpoint
 from jaxbridge.run.run_state import (Checkpointer, Done, RunGroup, check_checkpoint_belongs, fresh_start, load_config,
                                      restored, write_run_files)
 from jaxbridge.run.hooks import RunHooks
+from jaxbridge.run.model_repair import ModelRepair
 from jaxbridge.run.scheduling import CycleTimes
 from jaxbridge.run.tensorboard import CycleEvents
 from jaxbridge.utils.files import WriteError
@@ -61,7 +62,15 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], hooks
     elapsed = lambda: elapsed_before + time.perf_counter() - start
     done = Done(slots.place(done.learners), done.histories)  # checkpoints hold each run's state on one device
     program, saver = SlotProgram(group), Checkpointer(group, elapsed, saved=done.cycles)
+    if program.repair is not None and done.cycles:
+        program.repair.restore(group.run_dirs, done.cycles, program.cycle)
     display, writable = CycleDisplay(group, hooks, saved=done.cycles), True
+
+    def save(done: Done) -> None:
+        saver.save(done)
+        if program.repair is not None and group.primary:
+            program.repair.save(group.run_dirs, config.seeds, done.cycles)
+
     try:
         for c in range(done.cycles + 1, config.cycles + 1):
             if hooks.stop is not None and hooks.stop.is_set():
@@ -71,12 +80,13 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], hooks
                 hooks.on_cycle()
             display.cycle(c, [history[-1] for history in done.histories])
             if c % config.checkpoint_every == 0 or c == config.cycles or c in config.keep_cycles:
-                saver.save(done)
+                save(done)
             if hooks.widen is not None and c < config.cycles:
                 done = program.widen(done, hooks.widen, config.cycles - c)
                 saver.group = program.group
     except KeyboardInterrupt:
-        saver.save_if_behind(done)
+        if done.cycles > saver.saved:
+            save(done)
         raise Interrupted(done.cycles) from None
     except WriteError:
         writable = False
@@ -93,12 +103,15 @@ class SlotProgram:
 
     def __init__(self, group: RunGroup):
         self.group, self.cycle = group, Cycle(group.setup, group.slots, group.configs)
+        self.repair = ModelRepair(group.setup, group.slots.num_seeds) if group.setup.approach.repairs_model else None
         self.times = CycleTimes()
         self.compiling_s, self.device_s, self.seed_cycles = 0.0, 0.0, 0  # for the pace (`pace`)
 
     def next_cycle(self, done: Done, c: int, fault_injection: Callable | None, last_saved: int) -> Done:
         start = time.perf_counter()
         done = next_cycle(self.cycle, self.group, done, c, fault_injection, last_saved)
+        if self.repair is not None:
+            self.repair.after_cycle(c, self.cycle)
         seconds = time.perf_counter() - start
         if self.times.first_s is None:
             self.compiling_s += seconds
@@ -129,6 +142,8 @@ class SlotProgram:
             return done
         self.group = dataclasses.replace(self.group, slots=SeedMesh(old.num_seeds, old.devices + tuple(more), old.block))
         self.cycle = Cycle(self.group.setup, self.group.slots, self.group.configs)
+        if self.repair is not None:
+            self.repair.retask(self.cycle)
         self.times.recompiled()
         return Done(self.group.slots.place(old.unpad(done.learners)), done.histories)
 

@@ -1,0 +1,98 @@
+"""The repair approach's host side (learn/approaches.MODEL_REPAIR): each slot's skill calls so far, the model
+learned from them, and its tasks planned with that model.
+
+After a cycle, every slot's training episodes are cut into segments (the planner's stalls and the
+bridge's fixes among them) and the most recent `KEPT_SEGMENTS` kept. After cycles 1, 2, 4, 8, ... each
+slot's model is learned again from them and its training and test tasks are planned with it
+(learn/model/device.py): a doubling schedule, so early cycles get a model from their first fixes while a
+long run relearns only log2(cycles) times.
+
+Beside each checkpoint a run keeps what it resumes from, `model_repair/<cycle>.pkl` (its slots' segments
+and models), and its seeds' latest learned domains as PDDL, `models/seed<N>.pddl`.
+"""
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+
+import jax
+import numpy as np
+
+from jaxbridge.core.tasks import TaskArrays, TaskBatch
+from jaxbridge.learn.model.device import model_batch
+from jaxbridge.learn.model.model import LearnedModel, learn_model
+from jaxbridge.learn.model.segments import Segment, segments_from_records
+from jaxbridge.learn.online import Cycle
+from jaxbridge.learn.setup import Setup
+from jaxbridge.run import checkpoint
+from jaxbridge.utils.files import write_atomic
+
+KEPT_SEGMENTS = 5000  # per slot: about a few cycles of a paper env's training episodes
+
+
+def relearns_after(cycle: int) -> bool:
+    """Whether the models are learned again after `cycle` (1, 2, 4, 8, ...)."""
+    return cycle & (cycle - 1) == 0
+
+
+class ModelRepair:
+    """Per slot (run-major: slot i is seed i % num_seeds), its segments and its learned model."""
+
+    def __init__(self, setup: Setup, slots: int):
+        self.setup = setup
+        self.segments: list[list[Segment]] = [[] for _ in range(slots)]
+        self.models: list[LearnedModel | None] = [None] * slots
+
+    def after_cycle(self, cycle_number: int, cycle: Cycle) -> None:
+        """Keep the cycle's segments; on the schedule, relearn every slot's model and retask `cycle`."""
+        train, records = self.setup.train, jax.tree.map(np.asarray, cycle.seeds.unpad(cycle.records))
+        per_seed = train.size // self.setup.config.num_seeds
+        for slot, kept in enumerate(self.segments):
+            first = (slot % self.setup.config.num_seeds) * per_seed
+            slot_records = jax.tree.map(lambda x: x[slot], records)
+            kept += segments_from_records(train.env, train.specs[first:first + per_seed], slot_records)
+            del kept[:-KEPT_SEGMENTS]
+        if relearns_after(cycle_number):
+            self.models = [learn_model(self.setup.env_cls, kept) if kept else None for kept in self.segments]
+            self.retask(cycle)
+
+    def retask(self, cycle: Cycle) -> None:
+        """`cycle`'s tasks planned with the slots' models, once every slot has one."""
+        if all(model is not None for model in self.models):
+            cycle.retask(self.planned(self.setup.train), self.planned(self.setup.test))
+
+    def planned(self, batch: TaskBatch) -> TaskArrays:
+        """Every slot's tasks of `batch` (seed-major) planned with its model: TaskArrays [slots, n, ...]."""
+        seeds = self.setup.config.num_seeds
+        per_seed = batch.size // seeds
+        owner = [slot for slot in range(len(self.models)) for _ in range(per_seed)]
+        specs = [batch.specs[(slot % seeds) * per_seed + k] for slot in range(len(self.models)) for k in range(per_seed)]
+        horizons = np.tile(np.asarray(batch.horizons).reshape(seeds, per_seed), (len(self.models) // seeds, 1)).ravel()
+        planned = model_batch(batch.env, specs, owner, dict(enumerate(self.models)), list(horizons))
+        return jax.tree.map(lambda x: np.reshape(np.asarray(x), (len(self.models), per_seed) + x.shape[1:]), planned.arrays)
+
+    def save(self, run_dirs: list[Path], seeds: list[int], cycle_number: int) -> None:
+        """Each run's slots' segments and models beside its checkpoint of `cycle_number` (older ones whose
+        checkpoint is gone are deleted), and its seeds' latest domains as PDDL."""
+        for i, run_dir in enumerate(run_dirs):
+            mine = slice(i * len(seeds), (i + 1) * len(seeds))
+            state = {"segments": self.segments[mine], "models": self.models[mine]}
+            for folder in ("model_repair", "models"):
+                (run_dir / folder).mkdir(exist_ok=True)
+            write_atomic(run_dir / "model_repair" / f"{cycle_number}.pkl", pickle.dumps(state))
+            kept = set(checkpoint.sealed_steps(run_dir / "checkpoints")) | {cycle_number}
+            for old in (run_dir / "model_repair").glob("*.pkl"):
+                if old.stem.isdigit() and int(old.stem) not in kept:
+                    old.unlink()
+            for seed, model in zip(seeds, self.models[mine]):
+                if model is not None:
+                    write_atomic(run_dir / "models" / f"seed{seed}.pddl", model.pddl())
+
+    def restore(self, run_dirs: list[Path], cycle_number: int, cycle: Cycle) -> None:
+        """The state saved beside cycle `cycle_number`'s checkpoints, and `cycle` retasked with its models."""
+        self.segments, self.models = [], []
+        for run_dir in run_dirs:
+            state = pickle.loads((run_dir / "model_repair" / f"{cycle_number}.pkl").read_bytes())
+            self.segments += state["segments"]
+            self.models += state["models"]
+        self.retask(cycle)

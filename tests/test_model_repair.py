@@ -1,0 +1,85 @@
+"""The repair approach (learn/approaches.MODEL_REPAIR): a learned model's plan tables on the device
+(learn/model/device.py, core/learned_atoms.py) and its host side between cycles (run/model_repair.py)."""
+from __future__ import annotations
+
+import jax
+import numpy as np
+import pytest
+
+import jaxbridge
+from envs_jax.multi_novelty.env import MultiNovelty
+from jaxbridge.core.bridges import make_bridge
+from jaxbridge.core.learned_atoms import invented_holds
+from jaxbridge.core import tasks
+from jaxbridge.learn.model.device import model_batch
+from jaxbridge.learn.model.segments import TaskReader
+from jaxbridge.learn.online import make_train
+from jaxbridge.learn.setup import make_setup
+from jaxbridge.run.evaluate import batch_rollout, run_bridge
+from jaxbridge.run.runner import Interrupted, train
+from planner import read_domain
+
+BOTH_LOCKS = "held_out"  # Multi Novelty's protocol of doors with both locks, which no training task holds
+
+
+def _interrupt_at_cycle_2(cycle: int, learners):
+    if cycle == 2:
+        raise KeyboardInterrupt
+    return learners
+
+
+@pytest.fixture(scope="module")
+def model():
+    return jaxbridge.learn_model("multi_novelty", jaxbridge.record_segments("multi_novelty", seed=0))
+
+
+@pytest.fixture(scope="module")
+def planned(model):
+    specs = tasks.test_specs(MultiNovelty, 0, 3, BOTH_LOCKS)
+    return model_batch(MultiNovelty.for_tasks(specs), specs, [0] * len(specs), {0: model})
+
+
+def test_the_device_reads_the_invented_atoms_the_grammar_reads(model, planned):
+    """Every invented atom of a task, evaluated on the device from the object view, holds exactly where
+    the learner's grammar says it does, along whole episodes (doors opening, keys carried)."""
+    _, records = batch_rollout(planned, make_bridge("none", planned.env), record=True)
+    env, records = planned.env, jax.tree.map(np.asarray, records)
+    compared = 0
+    for b, (spec, compiled) in enumerate(zip(planned.specs, planned.compiled)):
+        task, reader = compiled.planner.task, TaskReader(env, spec)
+        table = jax.tree.map(lambda x: x[b], planned.arrays.tables.model)
+        for t in np.flatnonzero(records.live[:, b])[::5]:
+            state = jax.tree.map(lambda x: x[t, b], records.env_state)
+            objects = jax.tree.map(np.asarray, env.objects(state))
+            view = reader.view(objects.type_id, objects.features, objects.position, np.asarray(env.abstract(state)))
+            device = np.asarray(invented_holds(table, env.objects(state)))[:len(task.invented)]
+            assert {a for a, holds in zip(task.invented, device) if holds} == set(task.invented) & model.grammar.atoms(view)
+            compared += 1
+    assert compared > 10
+
+
+def test_the_learned_models_tables_take_doors_with_both_locks_to_the_goal_on_the_device(planned):
+    """The meta-policy with the learned model's tables and no bridge solves what the env's model cannot."""
+    none = make_bridge("none", planned.env)
+    repaired = run_bridge(planned, none)
+    assert repaired.success.all() and (repaired.stuck_events == 0).all()
+    own = tasks.evaluation_batch(MultiNovelty, [0], len(planned.specs), protocol=BOTH_LOCKS)
+    assert not run_bridge(own, none).success.any()
+
+
+def test_a_repair_run_relearns_writes_its_domains_and_resumes_exactly(tmp_path):
+    """Two cycles straight, and one cycle, Ctrl-C, then a resumed one: the same metrics (the second cycle plans
+    with the model learned after the first), the seed's domain as PDDL that reads back."""
+    config = jaxbridge.make_config("multi_novelty", approach="ours_model_repair", num_seeds=1, cycles=2,
+                                   episodes_per_cycle=4, num_test_tasks=3, updates_per_cycle=2, checkpoint_every=1)
+    for run in ("straight", "halted"):
+        (tmp_path / run).mkdir()
+    train(make_setup(config), tmp_path / "straight")
+    with pytest.raises(Interrupted):
+        train(make_setup(config), tmp_path / "halted", fault_injection=_interrupt_at_cycle_2)
+    train(make_setup(config), tmp_path / "halted", resume=True)
+    assert (tmp_path / "halted" / "metrics.csv").read_text() == (tmp_path / "straight" / "metrics.csv").read_text()
+    domain = read_domain((tmp_path / "straight" / "models" / "seed0.pddl").read_text())
+    assert any(op.name.startswith("MoveRobot_") for op in domain.operators)  # the move, repaired
+    with pytest.raises(ValueError, match="relearned on the host between cycles"):
+        make_train(make_setup(config))
