@@ -84,11 +84,13 @@ def parse_args(argv):
                              "of the first seed on which the bridge opened the most doors (the first of those; "
                              "task 0 if none is solved)")
     parser.add_argument("--attention", action="store_true",
-                        help="with a RUN of ours_learned_selection: per seed, how often the object its attention "
-                             "weighs most at a bridge decision is the one the env's fix acts on (the oracle's); "
-                             "then how often that object is the nearest candidate, the distance rank of what the "
-                             "misses looked at, the seeds that look right but fail, and how often it is looked at by the "
-                             "action chosen")
+                        help="with a RUN of ours_learned_selection: per seed, how often the object its attention weighs "
+                             "most at a bridge decision is the one the env's fix acts on (the oracle's); then how often "
+                             "that object is the nearest candidate, the distance rank of what the misses looked at, the "
+                             "seeds that look right but fail, and how often it is looked at by the action chosen")
+    parser.add_argument("--planner-alone", action="store_true",
+                        help="with a RUN of ours_model_repair: its learned model's planner alone, no bridge (a stall "
+                             "is a failure), on the RUN's tasks (its test tasks, --test-protocol's or --task-size's)")
     parser.add_argument("--cycle", type=positive_int, default=None, metavar="N",
                         help="with RUNs: evaluate the checkpoint saved after cycle N (a run keeps its latest two and "
                              "those of train.py --keep-cycles) (default: the latest)")
@@ -113,7 +115,8 @@ def check_flags(args) -> None:
                 (args.sweep is None and len(args.runs) > 2, f"give one RUN, or two to compare side by side; got {len(args.runs)}"),
                 (len(args.runs) == 2 and drawing, "--render/--gif draw an episode of one run; give one RUN"),
                 (not args.runs and args.task_size is not None, "--task-size evaluates a trained RUN on larger tasks; give a RUN"),
-                (args.attention and len(args.runs) != 1, "--attention reports on one RUN's evaluation; give one RUN"),
+                ((args.attention or args.planner_alone) and len(args.runs) != 1,
+                 f"--{'attention' if args.attention else 'planner-alone'} evaluates one RUN; give one RUN"),
                 (args.test_protocol is not None and args.runs and (args.sweep is not None or args.task_size is not None),
                  "--test-protocol picks a RUN's test tasks; it does not combine with --sweep or --task-size"),
                 (args.cycle is not None and (not args.runs or args.sweep is not None),
@@ -129,13 +132,14 @@ def check_flags(args) -> None:
 
 def evaluate(args, policy: jaxbridge.Policy) -> jaxbridge.Episodes:
     """A run's latest checkpoint on its test tasks or --task-size tasks, with a header line."""
-    start = time.perf_counter()
-    episodes = policy.evaluate(task_size=args.task_size, num_tasks=args.num_tasks, rollout_seed=args.rollout_seed,
-                               max_memory=args.max_memory, test_protocol=args.test_protocol)
+    start, run = time.perf_counter(), policy.planner_alone if args.planner_alone else policy.evaluate
+    episodes = run(task_size=args.task_size, num_tasks=args.num_tasks, rollout_seed=args.rollout_seed,
+                   max_memory=args.max_memory, test_protocol=args.test_protocol)
     what = (f"{args.num_tasks} tasks per seed of " + ", ".join(f"{k} {v}" for k, v in args.task_size.items())
             if args.task_size else "test tasks" + (f" ({args.test_protocol} protocol)" if args.test_protocol else ""))
     print(f"{policy.run_dir}: {policy.config.env}, {policy.config.approach}, checkpoint of cycle {policy.cycle}, "
-          f"greedy bridge, {what} ({time.perf_counter() - start:.1f} s including compilation)")
+          f"{'learned planner alone' if args.planner_alone else 'greedy bridge'}, {what} "
+          f"({time.perf_counter() - start:.1f} s including compilation)")
     return episodes
 
 

@@ -2,6 +2,8 @@
 (learn/model/device.py, core/learned_atoms.py) and its host side between cycles (run/model_repair.py)."""
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import numpy as np
 import pytest
@@ -30,7 +32,7 @@ def _interrupt_at_cycle_2(cycle: int, learners):
 
 @pytest.fixture(scope="module")
 def model():
-    return jaxbridge.learn_model("multi_novelty", jaxbridge.record_segments("multi_novelty", seed=0))
+    return jaxbridge.learn_model("multi_novelty", jaxbridge.record_segments("multi_novelty", seed=0, episodes=10, rollouts=2))
 
 
 @pytest.fixture(scope="module")
@@ -69,7 +71,8 @@ def test_the_learned_models_tables_take_doors_with_both_locks_to_the_goal_on_the
 
 def test_a_repair_run_relearns_writes_its_domains_and_resumes_exactly(tmp_path):
     """Two cycles straight, and one cycle, Ctrl-C, then a resumed one: the same metrics (the second cycle plans
-    with the model learned after the first), the seed's domain as PDDL that reads back."""
+    with the model learned after the first); the seed's domain as PDDL that reads back; the run evaluated
+    with its model, whose planner alone takes doors with both locks to the goal."""
     config = jaxbridge.make_config("multi_novelty", approach="ours_model_repair", num_seeds=1, cycles=2,
                                    episodes_per_cycle=4, num_test_tasks=3, updates_per_cycle=2, checkpoint_every=1)
     for run in ("straight", "halted"):
@@ -81,5 +84,11 @@ def test_a_repair_run_relearns_writes_its_domains_and_resumes_exactly(tmp_path):
     assert (tmp_path / "halted" / "metrics.csv").read_text() == (tmp_path / "straight" / "metrics.csv").read_text()
     domain = read_domain((tmp_path / "straight" / "models" / "seed0.pddl").read_text())
     assert any(op.name.startswith("MoveRobot_") for op in domain.operators)  # the move, repaired
+    policy = jaxbridge.load(tmp_path / "straight")  # evaluated with the model it planned with at its last cycle
+    assert policy.tasks().arrays.tables.model is not None
+    assert policy.planner_alone(test_protocol=BOTH_LOCKS).success.all()
+    policy.trained = dataclasses.replace(policy.trained, models=None)
+    with pytest.raises(jaxbridge.InputError, match="learns no planner model"):
+        policy.planner_alone()
     with pytest.raises(ValueError, match="relearned on the host between cycles"):
         make_train(make_setup(config))

@@ -144,6 +144,17 @@ class Policy(Bridges):
         exceed `max_memory` GiB (default: what is available) are refused (InputError)."""
         return self.episodes(self.tasks(tasks, task_size, seeds, num_tasks, max_memory, test_protocol), rollout_seed)
 
+    def planner_alone(self, rollout_seed: int = 0, **which_tasks) -> Episodes:
+        """A repair run's (ours_model_repair) learned planner alone on `evaluate`'s tasks (`which_tasks`, as
+        there): no bridge, so a stall ends in failure (the planner plans again from the state it stalled in,
+        and stalls again). InputError for a run that learns no model."""
+        if self.trained.models is None:
+            raise InputError(f"{self.config.approach} learns no planner model: the planner alone is a model repair "
+                             f"run's (ours_model_repair)")
+        alone = HandMade(self.config.env, "none", self.config.test_protocol)
+        alone.label = f"learned planner alone of {self.config.approach}, cycle {self.cycle}"
+        return alone.episodes(self.tasks(**which_tasks), rollout_seed)
+
     def attention(self, episodes: Episodes, rollout_seed: int = 0):
         """What a learned object selector (ours_learned_selection) looks at on `episodes`' tasks: per seed,
         the fraction of bridge decisions whose most attended object is the one the env's fix acts on

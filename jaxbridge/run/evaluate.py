@@ -17,6 +17,7 @@ from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.learn.approaches import Approach
 from jaxbridge.learn.setup import Setup
 from jaxbridge.run.memory import check_evaluation
+from jaxbridge.run.model_repair import load_models, planned_with
 from jaxbridge.run.runner import load_learners
 from jaxbridge.utils.progress import SlowWork
 
@@ -95,6 +96,7 @@ class TrainedPolicy:
     setup: Setup
     step: int  # the checkpoint's cycle
     learners: Any  # stacked over config.seeds
+    models: dict | None = None  # a repair run's learned models by seed (run/model_repair.py), its planner's
 
     @property
     def config(self) -> TrainConfig:
@@ -129,7 +131,8 @@ def load_policy(run_dir, cycle: int | None = None) -> TrainedPolicy:
     """The greedy policy of a run directory's checkpoint after `cycle` (default: the latest;
     CheckpointError/ValueError if unusable)."""
     setup, learners, step = load_learners(Path(run_dir), cycle)
-    return TrainedPolicy(setup, step, learners)
+    models = load_models(Path(run_dir), step, setup.config.seeds) if setup.approach.repairs_model else None
+    return TrainedPolicy(setup, step, learners, models)
 
 
 def evaluate_run(run_dir, sized_specs=None, num_tasks: int = 10, seed: int = 0, max_memory: int | None = None):
@@ -168,7 +171,8 @@ def policy_tasks(policy: TrainedPolicy, sized_specs=None, num_tasks: int = 10, m
         sweep = env_cls.novelty_sweep if sized else None  # its horizon rule scales with the tasks' size
         batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None,
                            progress=SlowWork(f"{env_cls.name}: {'sized' if sized else 'given'} tasks and plan tables"))
-    return dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks))
+    batch = dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks))
+    return batch if policy.models is None else planned_with(batch, policy.models)
 
 
 def format_comparison(evaluations: dict[str, list[SeedSummary]]) -> str:

@@ -25,6 +25,7 @@ from jaxbridge.learn.model.segments import Segment, segments_from_records
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import Setup
 from jaxbridge.run import checkpoint
+from jaxbridge.run.checkpoint import CheckpointError
 from jaxbridge.utils.files import write_atomic
 
 KEPT_SEGMENTS = 5000  # per slot: about a few cycles of a paper env's training episodes
@@ -96,3 +97,16 @@ class ModelRepair:
             self.segments += state["segments"]
             self.models += state["models"]
         self.retask(cycle)
+
+
+def load_models(run_dir: Path, cycle: int, seeds: list[int]) -> dict[int, LearnedModel]:
+    """A repair run's models, by seed, as they were after `cycle` (a checkpoint's cycle)."""
+    path = Path(run_dir) / "model_repair" / f"{cycle}.pkl"
+    if not path.is_file():
+        raise CheckpointError(f"{path} is missing: the run's learned models after cycle {cycle}")
+    return dict(zip(seeds, pickle.loads(path.read_bytes())["models"]))
+
+
+def planned_with(batch: TaskBatch, models: dict[int, LearnedModel]) -> TaskBatch:
+    """`batch`'s tasks planned with their seeds' learned models."""
+    return model_batch(batch.env, batch.specs, batch.seeds.tolist(), models, np.asarray(batch.horizons).tolist())
