@@ -24,7 +24,7 @@ from jaxbridge.api.training import (Experiment, Training, all_approaches, defaul
 from jaxbridge.core.check_env import EnvContractError, check_env
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.presets import PRESETS
-from jaxbridge.learn.approaches import APPROACHES, KNOWN as ALL_APPROACHES, LOW_LEVEL, PLAN_REPAIR, SELECTION, SIGNATURE
+from jaxbridge.learn.approaches import APPROACHES, KNOWN as ALL_APPROACHES, LOW_LEVEL, MODEL_REPAIR, PLAN_REPAIR, SELECTION, SIGNATURE
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.learner import LearnerContractError, QLearner, check_learner
 from jaxbridge.learn.online import TrainOutput
@@ -36,7 +36,7 @@ from jaxbridge.utils.files import WriteError
 
 __all__ = ["ALL_APPROACHES", "APPROACHES", "Attention", "Bridges", "Drawn", "EnvContractError", "Episodes", "Experiment", "HandMade",
            "Hyper", "InputError", "LearnerContractError", "QLearner", "check_env", "check_learner",
-           "Interrupted", "LOW_LEVEL", "PlannedEpisodes", "learn_model", "plan_alone", "record_segments", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "SIGNATURE", "Policy", "SWEEP_TASKS",
+           "Interrupted", "LOW_LEVEL", "MODEL_REPAIR", "PlannedEpisodes", "learn_model", "plan_alone", "record_segments", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "SIGNATURE", "Policy", "SWEEP_TASKS",
            "TrainConfig", "TrainOutput", "Training", "WriteError", "all_approaches", "default_approaches", "default_workers", "env_names", "hand_made",
            "load", "load_env", "local_devices", "make_config", "make_env", "make_train", "prepare", "prepare_resume",
            "preset_values", "read_experiment", "release_locks", "resume", "run_labels", "seed_keys", "settings_help", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",
