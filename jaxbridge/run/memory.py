@@ -11,7 +11,9 @@ import numpy as np
 from envs_jax import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.tasks import compiled_task, evaluation_specs, make_batch, test_specs, train_specs, training_specs
+from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.setup import make_setup
+from jaxbridge.run.model_repair import KEPT_SEGMENTS
 from jaxbridge.utils.errors import InputError
 from planner.tables import table_shape
 
@@ -55,6 +57,15 @@ def state_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
     return tree_bytes(jax.eval_shape(make_setup(dataclasses.replace(config, num_seeds=1), env_cls).init_learners))
 
 
+def segments_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
+    """One seed's skill calls a model repair run keeps on the host (run/model_repair.py), 0 for another
+    approach: each call two states of the object view, and about a kilobyte of Python around each."""
+    if not get_approach(config.approach).repairs_model:
+        return 0
+    env = env_cls.for_tasks(train_specs(env_cls, config.first_seed, config.episodes_per_cycle))
+    return KEPT_SEGMENTS * 2 * (env.num_objects * (env.object_width + 3) * 4 + 1024)
+
+
 def task_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
     """One seed's training and test tasks with their plan tables (the first seed's), which every approach
     of an experiment shares; compiled by the envs the run's batches will have (each holds every seed's
@@ -84,7 +95,8 @@ def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], programs: lis
     limit, what = limit_bytes(limit)
     approaches = list(dict.fromkeys(c.approach for c, _ in programs))
     states = sorted((state_bytes(c, env_cls) * runs for c, runs in programs), reverse=True)
-    per_seed = STATE_COPIES * sum(states[:max(1, workers)]) + task_bytes(config, env_cls)
+    repairs = sum(segments_bytes(c, env_cls) * runs for c, runs in programs)
+    per_seed = STATE_COPIES * sum(states[:max(1, workers)]) + task_bytes(config, env_cls) + repairs
     need, fit = totals(config.num_seeds, per_seed, limit)
     if need > limit:
         raise TooBig(f"this run needs about {need / 2**30:.1f} GiB ({per_seed / 2**20:.1f} MiB per seed for "

@@ -14,6 +14,7 @@ quantified one) is read afresh at each plan, never predicted.
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 from dataclasses import dataclass, field
@@ -195,6 +196,13 @@ def compile_model_task(env: NoveltyEnv, spec, model: LearnedModel, atoms: int, o
     return CompiledTask(int(table.uid), own.problem, own.ground_ops, planner, init, table, len(states))
 
 
+def _with_rows(table, rows: int):
+    """`table` with its plan rows padded to `rows` (invalid rows)."""
+    pad = lambda x, fill: np.concatenate([x, np.full((rows - x.shape[0],) + x.shape[1:], fill, x.dtype)])
+    return table.replace(state_keys=pad(table.state_keys, 0), state_valid=pad(table.state_valid, False),
+                         next_op=pad(table.next_op, NO_OPERATOR), next_keys=pad(table.next_keys, 0))
+
+
 def _capacity(n: int) -> int:
     """The next power of two: a model that grows a little keeps its shapes, and a cycle its program."""
     return 1 << max(0, n - 1).bit_length()
@@ -210,5 +218,7 @@ def model_batch(env: NoveltyEnv, specs: list, owners: list[int], models: dict[in
     compiled = {k: compile_model_task(env, k[1], t.model, atoms, operators, t) for k, t in tasks.items()}
     horizons = [s.horizon for s in specs] if horizons is None else horizons
     chosen = [compiled[o, s] for o, s in zip(owners, specs)]
+    rows = _capacity(max(c.table.state_keys.shape[0] for c in chosen))
+    chosen[0] = dataclasses.replace(chosen[0], table=_with_rows(chosen[0].table, rows))  # the stack pads the rest
     arrays = TaskArrays(tasks=env.stack_tasks(specs), tables=stack_tables(chosen), horizons=jnp.asarray(horizons, jnp.int32))
     return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(owners), compiled=chosen, arrays=arrays)
