@@ -106,6 +106,23 @@ class NoveltySweep:
     horizon: Callable[[Any], int]  # the spec's horizon, by the env's rule
 
 
+@dataclass(frozen=True)
+class NoveltyPredicate:
+    """A fact about the novelty that a perception system would report and the planner's model leaves out,
+    in the model learner's terms (`NoveltyEnv.novelty_predicates`): on each object of `type`, its feature
+    `feature` above `threshold` (below it or equal: `above=False`); with `other`, the distance between
+    `feature` and that other feature of the object instead (a band: within it is `above=False`); with
+    `when`, a flag feature of the object (0 or 1), the predicate reads "flag implies this": it holds
+    wherever the flag is off, too (a keycard door has its card held)."""
+
+    type: str
+    feature: str
+    threshold: float = 0.5  # a flag's (0 or 1)
+    above: bool = True
+    other: str | None = None
+    when: str | None = None
+
+
 def named_slots(names, capacity: int) -> tuple[str | None, ...]:
     """`names` in the first slots of a type's `capacity`, None in the rest (`object_names`' padding)."""
     names = tuple(names)
@@ -184,6 +201,10 @@ class NoveltyEnv(abc.ABC):
     # Behaviours of the authors' env that this one departs from but can switch back on (name -> what it
     # does); each is a bool field of the env's dataclass, off by default (`with_quirks`).
     quirks: ClassVar[dict[str, str]] = {}
+    # The novelty's facts a perception system would report (its planner model still leaves them out): the
+    # model learner's predicates in its *given* setting (`learn_model(..., given=True)`), the upper bound
+    # of the predicates it invents; () declares none.
+    novelty_predicates: ClassVar[tuple[NoveltyPredicate, ...]] = ()
 
     # ---- host: tasks and the planner's model -------------------------------------------------------
     @staticmethod

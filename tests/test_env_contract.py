@@ -9,6 +9,7 @@ import pytest
 
 import envs_jax
 from envs_jax import env_class, register
+from envs_jax.base import NoveltyPredicate
 from examples.locked_box import LockedBox
 from jaxbridge import EnvContractError, check_env
 import plugin_envs
@@ -56,6 +57,12 @@ def test_check_env_refuses_a_class_with_missing_methods_or_attributes():
 
     with pytest.raises(EnvContractError, match=r"Nameless.num_features: expected a positive int, got 0"):
         check_env(Nameless)
+
+    class Unseen(LockedBox):  # a novelty predicate on a feature its type lacks
+        novelty_predicates = (NoveltyPredicate("box", "locked"),)
+
+    with pytest.raises(EnvContractError, match=r"Unseen.novelty_predicates: expected NoveltyPredicates on features of their type"):
+        check_env(Unseen)
 
 
 def test_env_names_resolve_to_classes_and_bad_names_say_why():

@@ -29,7 +29,8 @@ import numpy as np
 
 from envs_jax.coffee import skills
 from envs_jax.coffee import world
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
+from envs_jax.base import (BridgeAction, NoveltyEnv, NoveltyPredicate, NoveltySweep, Objects, SkillCall, SkillSpec,
+                           named_slots)
 from envs_jax.coffee.world import MAX_CUPS, CoffeeTask, State, Task
 from planner.strips import Domain, LiftedOperator, Problem
 
@@ -194,6 +195,9 @@ class Coffee(NoveltyEnv):
     # robot acted on by a skill. Positions are on the table (x, y), as the jug's features measure them.
     object_types = {"robot": ("z", "tilt", "wrist", "fingers"), "jug": ("rot", "held", "filled"), "machine": ("on",),
                     "cup": ("capacity", "target", "current")}
+    # What a perception system would report of the jug: its rotation within the grasp's reach, |rot| < pi/3
+    novelty_predicates = (NoveltyPredicate("jug", "rot", world.PICK_JUG_ROT_TOL, above=False),
+                          NoveltyPredicate("jug", "rot", -world.PICK_JUG_ROT_TOL))
 
     @property
     def num_objects(self) -> int:

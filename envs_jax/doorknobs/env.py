@@ -22,7 +22,8 @@ from flax import struct
 
 from envs_jax import geometry
 from envs_jax.doorknobs import maps, motion
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
+from envs_jax.base import (BridgeAction, NoveltyEnv, NoveltyPredicate, NoveltySweep, Objects, SkillCall, SkillSpec,
+                           named_slots)
 from envs_jax.doorknobs.maps import (
     ACTION_MAGNITUDE,
     BOTTOM,
@@ -327,6 +328,7 @@ class Doorknobs(NoveltyEnv):
 
     # The paper's objects (envs.md §3): the robot, the rooms and the doors, each door at its knob's corner.
     object_types = {"robot": (), "room": (), "door": ("rot", "target_rot", "open")}
+    novelty_predicates = (NoveltyPredicate("door", "open"),)  # what a perception system would report: a door open
     num_objects = property(lambda self: 1 + 3 * self._rooms)  # the robot, R rooms, 2R door slots
     # the door slots between two rooms of the grid (a slot on its edge never holds a door)
     candidate_slots = property(lambda self: 1 + self._rooms + np.flatnonzero(self._layout[0][:, 1] >= 0))

@@ -15,7 +15,8 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
+from envs_jax.base import (BridgeAction, NoveltyEnv, NoveltyPredicate, NoveltySweep, Objects, SkillCall, SkillSpec,
+                           named_slots)
 from envs_jax.precision import ExactKey, ExactWindow, exact_window
 from planner.strips import Domain, LiftedOperator, Problem
 
@@ -342,6 +343,10 @@ class LightSwitchDoor(NoveltyEnv):
     # offset from there. Positions are not features: a feature says what an object is, not where.
     object_types = {"robot": (), "light": ("level", "target"), "cell": (),
                     "door": ("door_offset", "move_key", "move_target", "turn_key", "turn_target")}
+    # What a perception system would report of a door: each of its keys at its target (the door is open
+    # while both are)
+    novelty_predicates = (NoveltyPredicate("door", "move_key", DOOR_TOLERANCE, above=False, other="move_target"),
+                          NoveltyPredicate("door", "turn_key", DOOR_TOLERANCE, above=False, other="turn_target"))
 
     @property
     def num_objects(self) -> int:

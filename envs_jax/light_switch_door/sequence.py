@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.base import BridgeAction, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
+from envs_jax.base import BridgeAction, NoveltyPredicate, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
 from envs_jax.light_switch_door import env as lsd
 from envs_jax.light_switch_door.env import LightSwitchDoor
 from planner.strips import Domain, LiftedOperator, Problem
@@ -282,6 +282,8 @@ class LightSwitchSequence(LightSwitchDoor):
 
     # The paper's objects: the robot, the light, the cells and the door, whose features are the lock's.
     object_types = {"robot": (), "light": ("level", "target"), "cell": (), "door": ("progress", "next_target")}
+    # What a perception system would report of the door: open, every dial set (progress 1; k < 1000)
+    novelty_predicates = (NoveltyPredicate("door", "progress", 0.999),)
 
     @property
     def num_objects(self) -> int:

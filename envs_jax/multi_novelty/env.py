@@ -29,7 +29,8 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from envs_jax.base import BridgeAction, NoveltyEnv, NoveltySweep, Objects, SkillCall, SkillSpec, named_slots
+from envs_jax.base import (BridgeAction, NoveltyEnv, NoveltyPredicate, NoveltySweep, Objects, SkillCall, SkillSpec,
+                           named_slots)
 from envs_jax.multi_novelty import tasks
 from envs_jax.multi_novelty.tasks import KEYCARD, LATCHED, MultiNoveltyTask
 from planner.strips import Domain, LiftedOperator, Problem
@@ -294,6 +295,10 @@ class MultiNovelty(NoveltyEnv):
     # cell while it is closed, a card where it lies until it is held, the light always.
     object_types = {"robot": (), "light": ("on", "fuse_ok"), "cell": (),
                     "door": ("keycard", "card_held", "latched", "latch_up", "released", "stiffness"), "key": ("held",)}
+    # What a perception system would report of the novelties: a keycard door's card held and a latched door
+    # released (its two locks undone), a latch lifted, a card held, the light's fuse good.
+    novelty_predicates = (NoveltyPredicate("door", "card_held", when="keycard"), NoveltyPredicate("door", "released", when="latched"),
+                          NoveltyPredicate("door", "latch_up"), NoveltyPredicate("key", "held"), NoveltyPredicate("light", "fuse_ok"))
 
     @property
     def num_objects(self) -> int:

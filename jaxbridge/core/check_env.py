@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from envs_jax.base import POSITION_DIM, NoveltyEnv, SkillCall, SkillSpec, stack_trees
+from envs_jax.base import POSITION_DIM, NoveltyEnv, NoveltyPredicate, SkillCall, SkillSpec, stack_trees
 from jaxbridge.core.bridges import OracleBridge, RandomBridge
 from jaxbridge.core.meta_policy import MetaPolicy, rollout
 from jaxbridge.core.tasks import evaluation_batch, make_batch
@@ -94,6 +94,15 @@ def _check_class(cls: type) -> None:
         isinstance(f, tuple) and all(isinstance(n, str) for n in f) for f in types.values()),
         f"{name}.object_types", "the object view's types, the robot's first: {type name: (feature name, ...)}",
         repr(types))
+    _check_novelty_predicates(cls, types)
+
+
+def _check_novelty_predicates(cls: type, types: dict[str, tuple]) -> None:
+    """Each declared novelty predicate reads features its type has (the model learner's given setting)."""
+    for p in getattr(cls, "novelty_predicates", ()):
+        named = {p.feature, p.other, p.when} - {None} if isinstance(p, NoveltyPredicate) else {None}
+        _expect(isinstance(p, NoveltyPredicate) and named <= set(types.get(p.type, ())), f"{cls.__name__}.novelty_predicates",
+                "NoveltyPredicates on features of their type in object_types", repr(p))
 
 
 def _check_specs(cls: type[NoveltyEnv], seed: int, num_test_tasks: int) -> tuple[Any, list]:
