@@ -41,12 +41,13 @@ def record_segments(env: EnvLike, seed: int, episodes: int = 20, rollouts: int =
     return segments
 
 
-def learn_model(env: EnvLike, segments: list[Segment]) -> LearnedModel:
+def learn_model(env: EnvLike, segments: list[Segment], given: bool = False) -> LearnedModel:
     """The env's planner model repaired where its operators stalled and extended with the operators and
-    samplers the segments show, over predicates invented from the object view."""
+    samplers the segments show, over predicates invented from the object view, or with `given` over the
+    novelty predicates the env declares (`NoveltyEnv.novelty_predicates`; InputError where it has none)."""
     if not segments:
         raise InputError("learn_model: no segments to learn from")
-    return _learn(load_env(env), segments)
+    return _learn(load_env(env), segments, given)
 
 
 @dataclass(frozen=True)

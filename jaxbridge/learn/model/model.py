@@ -7,9 +7,10 @@ from dataclasses import dataclass
 from envs_jax.base import NoveltyEnv
 from jaxbridge.learn.model.operators import (Cluster, Examples, bind, cluster_effects, lift, model_bindings,
                                              never_worked, new_operator, repair, typed_objects)
-from jaxbridge.learn.model.predicates import Data, Grammar, Literal, make_grammar, read_data, stall_cuts
+from jaxbridge.learn.model.predicates import Data, Grammar, Literal, given_grammar, make_grammar, read_data, stall_cuts
 from jaxbridge.learn.model.samplers import Sampler, fit_sampler
 from jaxbridge.learn.model.segments import Segment, View
+from jaxbridge.utils.errors import InputError
 from planner.strips import Atom, Domain, LiftedOperator, domain_pddl
 
 MIN_CALLS = 2  # an effect seen once is not made an operator (a random call's accident)
@@ -35,18 +36,26 @@ class LearnedModel:
         return tuple(op for op in self.domain.operators if op not in self.base_operators)
 
 
-def learn_model(env_cls: type[NoveltyEnv], segments: list[Segment]) -> LearnedModel:
-    """The env's model repaired and extended from `segments` (see operators.py)."""
+def learn_model(env_cls: type[NoveltyEnv], segments: list[Segment], given: bool = False) -> LearnedModel:
+    """The env's model repaired and extended from `segments` (see operators.py), over predicates invented
+    from the object view, or with `given` over the env's declared `novelty_predicates` (InputError if
+    it declares none)."""
+    if given and not env_cls.novelty_predicates:
+        raise InputError(f"learn_model: {env_cls.name} declares no novelty predicates (given=True needs them)")
     domain, data = env_cls.domain, read_data(segments, env_cls.object_types)
     calls = {op.name: _model_calls(op, segments, domain) for op in domain.operators if op.add or op.delete}
-    grammar = make_grammar(data, _cuts(calls, make_grammar(data), data))
+    if given:
+        grammar = given_grammar(data, env_cls.novelty_predicates)
+    else:
+        grammar = make_grammar(data, _cuts(calls, make_grammar(data), data))
     cache: dict[int, frozenset[Atom]] = {}
     atoms = lambda view, base=grammar: cache.setdefault(id(view), view.given | base.atoms(view))
     examples = {name: _examples(found, atoms) for name, found in calls.items()}
     repaired = [variant for op in domain.operators if op.name in examples for variant in repair(op, examples[op.name], grammar)]
     chosen = {a[0] for op in repaired for a in op.pre} - set(domain.predicates)
-    # a stall's threshold stays where a repair chose it (the atoms known so far are a superset)
-    grammar = make_grammar(data, grammar.cuts(chosen)).with_spans(chosen)
+    # a stall's threshold stays where a repair chose it (the atoms known so far are a superset); the
+    # declared predicates stay as declared
+    grammar = (grammar if given else make_grammar(data, grammar.cuts(chosen))).with_spans(chosen)
     relations = {p.name for p in grammar.relations}
     literals = {p.name for p in grammar.unary if isinstance(p, Literal)}
     new_skills = {op.skill for op in domain.operators if not op.add and not op.delete}

@@ -12,6 +12,9 @@
   the way"): what a skill that walks needs of the cells it crosses.
 
 The robot takes part in no relation: where it is, is the planner model's own (each model tracks it).
+
+`given_grammar` is the same structure over the env's declared novelty predicates instead of the literals
+read off the data (the *given* setting: what a perception system would report).
 """
 from __future__ import annotations
 
@@ -22,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from envs_jax.base import NoveltyPredicate
 from jaxbridge.learn.model.segments import Segment, View
 from planner.strips import Atom
 
@@ -305,7 +309,34 @@ def make_grammar(data: Data, cuts: dict[Measure, set[float]] | None = None) -> G
     guards = [g for g in literals if g.other is None and (g.type, g.feature) in data.static and g.binary and not g.above]
     either = [Either(g, lit) for g in guards for lit in literals
               if lit.type == g.type and (lit.type, lit.feature) not in data.static]
-    unary = tuple(literals + either)
+    return _structure(data, tuple(literals + either))
+
+
+def given_grammar(data: Data, declared: tuple[NoveltyPredicate, ...]) -> Grammar:
+    """The grammar whose unary predicates are the env's declared ones (`NoveltyPredicate`s: what a
+    perception system would report), each literal with its other side (a door open, and not), with the
+    relations and quantified atoms `make_grammar` builds over them: nothing read off thresholds."""
+    return _structure(data, tuple(p for d in declared for p in _declared(d, data)))
+
+
+def _declared(declared: NoveltyPredicate, data: Data) -> tuple[Literal | Either, ...]:
+    """A `NoveltyPredicate` in the grammar's terms: its literal and that literal's other side, or its
+    `Either` when it is implied by a flag."""
+    names = data.object_types[declared.type]
+    feature, other = names.index(declared.feature), names.index(declared.other) if declared.other else None
+    # a flag (every value seen 0 or 1) is named without its threshold: door_open, door_not_open
+    seen = data.distinct.get((declared.type, feature, None), np.zeros(0))
+    flag = other is None and 0 < declared.threshold < 1 and bool(np.isin(seen, (0, 1)).all())
+    literal = Literal(declared.type, feature, declared.feature, float(declared.threshold), declared.above, flag, other,
+                      declared.other or "")
+    if declared.when is None:
+        return literal, dataclasses.replace(literal, above=not literal.above)
+    guard = Literal(declared.type, names.index(declared.when), declared.when, 0.5, False, True)
+    return (Either(guard, literal),)
+
+
+def _structure(data: Data, unary: tuple[Literal | Either, ...]) -> Grammar:
+    """The grammar over `unary`: relations and quantified atoms between the types that share a place."""
     placed = [t for t in list(data.object_types)[1:]]
     pairs = list(itertools.permutations(placed, 2)) + [(t, t) for t in placed]
     relations = tuple(r for a, b in pairs for r in (SamePlace((a, b)), Before((a, b))))
