@@ -92,3 +92,14 @@ def test_a_repair_run_relearns_writes_its_domains_and_resumes_exactly(tmp_path):
         policy.planner_alone()
     with pytest.raises(ValueError, match="relearned on the host between cycles"):
         make_train(make_setup(config))
+
+
+def test_the_given_predicates_approach_is_refused_for_an_env_that_declares_none():
+    """Locked Box (examples/) declares no novelty predicates: the approach that learns over them is refused
+    before any work, and the invented one is not."""
+    from examples.locked_box import LockedBox
+
+    config = jaxbridge.make_config(LockedBox, approach="ours_model_repair_given", num_seeds=1)
+    with pytest.raises(ValueError, match="declares none"):
+        make_setup(config, LockedBox)
+    make_setup(dataclasses.replace(config, approach="ours_model_repair"), LockedBox)

@@ -36,6 +36,15 @@ class Approach:
     algorithm: str = ""  # the low-level baselines' brax trainer ("ppo" or "sac")
     per_signature: bool = False  # a Q-network of its own per failure signature (learn/signature_q.py)
     repairs_model: bool = False  # the planner plans with a model learned from the cycles' skill calls (run/model_repair.py)
+    given_predicates: bool = False  # that model over the env's declared novelty predicates, none invented
+
+    def check_env(self, env_cls: type[NoveltyEnv]) -> None:
+        """ValueError where the env lacks what the approach reads: a model learner, the env's object view;
+        the given predicates, the env's declaration of them."""
+        if self.repairs_model and not env_cls.object_types:
+            raise ValueError(f"{self.name} learns the planner's model from the object view; {env_cls.name} has none")
+        if self.given_predicates and not env_cls.novelty_predicates:
+            raise ValueError(f"{self.name} learns over the env's novelty_predicates; {env_cls.name} declares none")
 
     @property
     def learns(self) -> bool:
@@ -132,6 +141,9 @@ MODEL_REPAIR = {a.name: a for a in (
     Approach("ours_model_repair", "ours, model repair", BridgeKind.Q, Controls(),
              "ours with the planner's model repaired and extended from the skill calls of the cycles so far",
              repairs_model=True),
+    Approach("ours_model_repair_given", "ours, model repair, given predicates", BridgeKind.Q, Controls(),
+             "ours_model_repair over the env's declared novelty predicates (what perception would report), none "
+             "invented: the upper bound of what the operators can learn", repairs_model=True, given_predicates=True),
 )}
 
 KNOWN = {**APPROACHES, **LOW_LEVEL, **PLAN_REPAIR, **SELECTION, **SIGNATURE, **MODEL_REPAIR}

@@ -90,6 +90,7 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     """Resolve `config` (its env by name unless `env_cls` is given, its approach)."""
     env_cls = env_cls or env_class(config.env)
     approach = get_approach(config.approach)
+    approach.check_env(env_cls)
     train_env = env_cls.for_tasks(training_specs(env_cls, config.seeds, config.episodes_per_cycle)[0]
                                   ).with_quirks(config.env_quirks)
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]

@@ -27,6 +27,7 @@ from jaxbridge.learn.setup import Setup
 from jaxbridge.run import checkpoint
 from jaxbridge.run.checkpoint import CheckpointError
 from jaxbridge.utils.files import write_atomic
+from jaxbridge.utils.progress import SlowWork
 
 KEPT_SEGMENTS = 5000  # per slot: about a few cycles of a paper env's training episodes
 
@@ -54,7 +55,12 @@ class ModelRepair:
             kept += segments_from_records(train.env, train.specs[first:first + per_seed], slot_records)
             del kept[:-KEPT_SEGMENTS]
         if relearns_after(cycle_number):
-            self.models = [learn_model(self.setup.env_cls, kept) if kept else None for kept in self.segments]
+            progress = SlowWork(f"{self.setup.config.env}: planner models learned after cycle {cycle_number}")
+            self.models = []
+            for kept in self.segments:
+                given = self.setup.approach.given_predicates
+                self.models.append(learn_model(self.setup.env_cls, kept, given=given) if kept else None)
+                progress(len(self.models), len(self.segments))
             self.retask(cycle)
 
     def retask(self, cycle: Cycle) -> None:
