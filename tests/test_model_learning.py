@@ -7,6 +7,7 @@ import pytest
 
 import jaxbridge
 from envs_jax.base import SkillSpec
+from envs_jax.multi_novelty import MultiNovelty
 from envs_jax.multi_novelty.tasks import BOTH, task_of
 from jaxbridge.learn.model.model import learn_model
 from jaxbridge.learn.model.planning import plan
@@ -21,8 +22,10 @@ class GateRow:
     moves only; a move right out of the gate's cell needs the gate open, and PushGate opens it when the
     robot is there and pushes within 0.1 of the gate's weight."""
 
+    name = "gate_row"
     object_types = {"robot": (), "cell": (), "gate": ("open", "weight")}
     skills = (SkillSpec("MoveRobot"), SkillSpec("PushGate", 0.0, 1.0))
+    novelty_predicates = ()  # none declared: the given setting refuses it
     domain = Domain("gate-row", ("robot", "cell", "gate"), {"RobotInCell": ("robot", "cell"), "Adjacent": ("cell", "cell")}, (
         LiftedOperator("MoveRobot", (("?robot", "robot"), ("?cur", "cell"), ("?tgt", "cell")),
                        (("Adjacent", "?cur", "?tgt"), ("RobotInCell", "?robot", "?cur")), (("RobotInCell", "?robot", "?tgt"),),
@@ -154,22 +157,46 @@ def test_turning_the_dial_a_skill_the_model_knows_learns_the_effect_a_move_needs
 
 
 @pytest.fixture(scope="module")
-def multi_novelty_model():
-    return jaxbridge.learn_model("multi_novelty", jaxbridge.record_segments("multi_novelty", seed=0))
+def multi_novelty_segments():
+    return jaxbridge.record_segments("multi_novelty", seed=0)
+
+
+@pytest.fixture(scope="module")
+def multi_novelty_model(multi_novelty_segments):
+    return jaxbridge.learn_model("multi_novelty", multi_novelty_segments)
+
+
+def _both_locks_task():
+    return task_of(np.random.default_rng(7), 10, (BOTH,))  # one door, keycard and latched: no training task holds one
 
 
 def test_multi_noveltys_model_from_seed_0s_exploration_opens_a_door_with_both_locks_without_a_bridge(multi_novelty_model):
-    both = task_of(np.random.default_rng(7), 10, (BOTH,))  # one door, keycard and latched: no training task holds one
-    run = jaxbridge.plan_alone(multi_novelty_model, "multi_novelty", seed=0, specs=[both])
+    run = jaxbridge.plan_alone(multi_novelty_model, "multi_novelty", seed=0, specs=[_both_locks_task()])
     (episode,) = run.episodes
     assert episode.success, episode
     skills = [name.split("(")[0].rsplit("_", 1)[0] for name in episode.operators]
     assert {"FetchKey", "LiftLatch", "PushDoor", "ReplaceFuse", "TurnOnLight"} <= set(skills)
 
 
+def test_with_the_given_predicates_the_model_reads_only_multi_noveltys_declared_ones_and_still_opens_both_locks(
+        multi_novelty_segments):
+    model = jaxbridge.learn_model("multi_novelty", multi_novelty_segments, given=True)
+    declared = {"door_not_keycard_or_card_held", "door_not_latched_or_released", "door_latch_up", "door_not_latch_up",
+                "key_held", "key_not_held", "light_fuse_ok", "light_not_fuse_ok"}  # each literal with its other side
+    assert {p.name for p in model.grammar.unary} == declared
+    # nothing else invented: a predicate the env's model lacks is a declared one, a relation, or one quantified
+    structure = {p.name for p in model.grammar.relations + model.grammar.all_at + model.grammar.spans}
+    assert set(model.domain.predicates) - set(MultiNovelty.domain.predicates) <= declared | structure
+    assert all(p.unary.name in declared for p in model.grammar.all_at + model.grammar.spans)
+    (episode,) = jaxbridge.plan_alone(model, "multi_novelty", seed=0, specs=[_both_locks_task()]).episodes
+    assert episode.success, episode
+
+
 def test_the_model_api_refuses_what_it_cannot_learn_from():
     with pytest.raises(jaxbridge.InputError, match="no segments"):
         jaxbridge.learn_model("multi_novelty", [])
+    with pytest.raises(jaxbridge.InputError, match="gate_row declares no novelty predicates"):
+        learn_model(GateRow, _gate_row_segments(np.random.default_rng(0), calls=1), given=True)
     with pytest.raises(jaxbridge.InputError, match="positive counts"):
         jaxbridge.record_segments("multi_novelty", seed=0, episodes=0)
 
