@@ -1,5 +1,6 @@
 """The model learner (jaxbridge/learn/model/): known operators recovered from synthetic segments, and Multi
-Novelty's repaired model, learned from seed 0's exploration, planning what no training task held."""
+Novelty's repaired model, learned from seed 0's exploration over invented and over its declared (given)
+predicates, planning what no training task held."""
 from __future__ import annotations
 
 import numpy as np
