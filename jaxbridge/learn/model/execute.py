@@ -1,6 +1,7 @@
-"""The learned model's planner alone (no bridge): plan from the state reached, run the plan's first
-operator's skill to its end, again until the goal; a skill that changes nothing, no plan, or the horizon
-is a failure."""
+"""The learned model's planner alone (no bridge): plan from the state reached, run the plan's operators'
+skills each to its end while the atoms each one ends in are the ones the model predicts, and plan afresh
+from the state reached where they are not, until the goal; a skill that changes nothing, no plan, or the
+horizon is a failure."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -13,7 +14,7 @@ import numpy as np
 from envs_jax.base import NoveltyEnv, SkillCall
 from jaxbridge.core.meta_policy import same_state
 from jaxbridge.learn.model.model import LearnedModel
-from jaxbridge.learn.model.planning import plan
+from jaxbridge.learn.model.planning import ModelPlanner
 from jaxbridge.learn.model.segments import TaskReader
 
 
@@ -40,18 +41,22 @@ def _observed(env: NoveltyEnv, reader: TaskReader, state):
 
 def run_planner_alone(env: NoveltyEnv, model: LearnedModel, spec, horizon: int | None = None) -> PlannedEpisode:
     """One episode of `spec` acted by the learned model's plans alone."""
-    reader, goal = TaskReader(env, spec), env.planner_problem(spec).goal
+    reader, goal, planner = TaskReader(env, spec), env.planner_problem(spec).goal, ModelPlanner(model)
     horizon = spec.horizon if horizon is None else horizon
     step = jax.jit(partial(_skill_step, env))
     state, steps, ran = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))), 0, []
+    planned, expected = [], None  # the plan's operators left, and the atoms the model predicts now
     while steps < horizon:
         if bool(env.goal_reached(state)):
             return PlannedEpisode(True, steps, tuple(ran), "goal")
         view = _observed(env, reader, state)
-        found = plan(model, view, goal)
-        if not found:
-            return PlannedEpisode(False, steps, tuple(ran), "no plan")
-        op = found[0]
+        atoms = model.atoms(view)
+        if not planned or atoms != expected:  # the plan's prediction failed (or it ran out): plan afresh
+            planned = planner.plan(view, goal)
+            if not planned:
+                return PlannedEpisode(False, steps, tuple(ran), "no plan")
+        op, planned = planned[0], planned[1:]
+        expected = (atoms - op.delete) | op.add
         spec_of = env.skills[env.skill_index(op.skill)]
         sampler = model.samplers.get(op.name)
         param = sampler(view, op.slot_object) if sampler else (spec_of.param_low + spec_of.param_high) / 2

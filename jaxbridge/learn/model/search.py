@@ -1,0 +1,95 @@
+"""Plan search in a learned model's bit operators: A* with h_ff over FF's helpful actions, then, where that
+finds nothing, over every operator; each within a budget of heuristic evaluations.
+
+Why not planner.heuristic.astar over every operator: a learned model makes many atoms fluent that the
+env's model left out (every door's state on Doorknobs), and most operators change atoms no plan needs (a
+door off the way opened, a knob turned back and forth). Each such change is a new state at the same
+h_ff, so A* floods every plateau with their combinations: on a 7x7 Doorknobs map with 10 doors to the
+goal it evaluated 39,000 states in 4 minutes without a plan. Helpful actions (Hoffmann and Nebel's FF:
+the applicable operators that add an atom the state's relaxed plan needs) leave those changes out; on
+that task A* over them finds a 30-step plan (3 operators a door) from a few hundred states. Pruning to
+them can lose every plan, hence the second search over all operators.
+"""
+from __future__ import annotations
+
+import heapq
+import itertools
+
+from planner.heuristic import Relaxation, _bits
+from planner.search import BitOperator, by_lowest_precondition, successors
+
+# The searches find_plan tries in turn: (helpful actions only, h_ff's weight). On Doorknobs' 7x7 maps with 10
+# doors to the goal, weight 1 finds 30-step plans (3 operators a door) from 450-2,500 evaluations or none
+# from 20,000, weight 2 38-44-step ones from 150-1,400, which walk doorway to doorway past closed doors where
+# the model lets them (the env's model's MoveToDoorFromDoorWay has no door precondition) and stall there.
+SEARCHES = ((True, 1), (True, 2), (False, 1))
+EVALUATIONS = 5000  # heuristic evaluations per search (~7 ms each on those maps): then no plan
+
+
+def relaxed_plan(relaxation: Relaxation, state: int, goal: int) -> frozenset[int] | None:
+    """h_ff's relaxed plan from `state`: each open atom's achiever (`Relaxation.achievers`), back from the
+    goal; None where the relaxed goal is unreachable. Its size is h_ff."""
+    found = relaxation.achievers(state, goal)
+    if found is None:
+        return None
+    achiever, chosen, open_atoms = found[1], set(), list(_bits(goal & ~state))
+    while open_atoms:
+        op = achiever[open_atoms.pop()]
+        if op not in chosen:
+            chosen.add(op)
+            open_atoms += _bits(relaxation.ops[op].pre & ~state)
+    return frozenset(chosen)
+
+
+def _path(parent: dict[int, tuple[int, int]], state: int) -> list[int]:
+    plan = []
+    while state in parent:
+        state, op = parent[state]
+        plan.append(op)
+    return plan[::-1]
+
+
+def astar(relaxation: Relaxation, goal: int, root: int, helpful_only: bool, weight: int = 1,
+          budget: int = EVALUATIONS) -> list[int] | None:
+    """Weighted A* (unit costs, f = g + weight h_ff) from `root` to a state holding `goal`: operator indices, or None when
+    the search space (helpful actions only, if asked) holds no plan or `budget` evaluations found none.
+    Ties as planner.heuristic.astar's: the deeper state, then the earlier generated one, so runs repeat."""
+    ops = relaxation.ops
+    always, keyed = by_lowest_precondition(ops)
+    estimate = {root: relaxed_plan(relaxation, root, goal)}
+    if estimate[root] is None:
+        return None
+    order = itertools.count()
+    queue = [(weight * len(estimate[root]), 0, next(order), root)]
+    best_g, parent = {root: 0}, {}
+    while queue:
+        _, neg_g, _, state = heapq.heappop(queue)
+        g = -neg_g
+        if g > best_g[state]:
+            continue  # reached more cheaply since
+        if state & goal == goal:
+            return _path(parent, state)
+        helpful = estimate[state]
+        candidates = sorted(always + [i for bit in _bits(state) for i in keyed.get(bit, ())])
+        for op, nxt in successors(ops, state, candidates):
+            if helpful_only and op not in helpful or g + 1 >= best_g.get(nxt, g + 2):
+                continue
+            if nxt not in estimate:
+                if len(estimate) > budget:
+                    return None
+                estimate[nxt] = relaxed_plan(relaxation, nxt, goal)
+            if estimate[nxt] is not None:  # None: a dead end, the relaxed goal unreachable
+                best_g[nxt], parent[nxt] = g + 1, (state, op)
+                heapq.heappush(queue, (g + 1 + weight * len(estimate[nxt]), -(g + 1), next(order), nxt))
+    return None
+
+
+def find_plan(ops: list[BitOperator], goal: int, root: int, relaxation: Relaxation | None = None) -> list[int] | None:
+    """A plan's operator indices from `root` to `goal`: the first that `SEARCHES` finds, None if none does.
+    `relaxation`: `ops`' own, where a caller keeps it between searches."""
+    relaxation = relaxation or Relaxation(ops)
+    for helpful_only, weight in SEARCHES:
+        found = astar(relaxation, goal, root, helpful_only, weight)
+        if found is not None:
+            return found
+    return None
