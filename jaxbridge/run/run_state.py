@@ -90,15 +90,23 @@ def restored(group: RunGroup) -> tuple[Done, float]:
 class Checkpointer:
     """Each run's checkpoint of a `Done` (its unpadded state, on one device), with the cycle saved last."""
 
-    def __init__(self, group: RunGroup, elapsed: Callable[[], float], saved: int):
-        self.group, self.elapsed, self.saved = group, elapsed, saved
+    def __init__(self, group: RunGroup, elapsed: Callable[[], float], saved: int,
+                 beside: Callable[[int], None] | None = None):
+        """`beside(cycle)`: what else a save of `cycle` writes (a model repair's models)."""
+        self.group, self.elapsed, self.saved, self.beside = group, elapsed, saved, beside
 
     def save(self, done: Done) -> None:
         state = self.group.slots.unpad(done.learners)
         for i, (config, run_dir) in enumerate(self.group.written):
             checkpoint.save(run_dir / "checkpoints", len(done.histories[i]), self.group.of_run(state, i),
                             checkpoint_record(config, done.histories[i], self.elapsed()), keep=config.keep_cycles)
+        if self.beside is not None:
+            self.beside(done.cycles)
         self.saved = done.cycles
+
+    def save_if_behind(self, done: Done) -> None:
+        if done.cycles > self.saved:
+            self.save(done)
 
 
 def write_run_files(group: RunGroup, done: Done, elapsed_s: float, writable: bool = True) -> list[dict | None]:

@@ -61,16 +61,9 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], hooks
     done, elapsed_before = restored(group) if resume else fresh_start(group)
     elapsed = lambda: elapsed_before + time.perf_counter() - start
     done = Done(slots.place(done.learners), done.histories)  # checkpoints hold each run's state on one device
-    program, saver = SlotProgram(group), Checkpointer(group, elapsed, saved=done.cycles)
-    if program.repair is not None and done.cycles:
-        program.repair.restore(group.run_dirs, done.cycles, program.cycle)
+    program = SlotProgram(group, resumed_at=done.cycles)
+    saver = Checkpointer(group, elapsed, saved=done.cycles, beside=program.save_beside)
     display, writable = CycleDisplay(group, hooks, saved=done.cycles), True
-
-    def save(done: Done) -> None:
-        saver.save(done)
-        if program.repair is not None and group.primary:
-            program.repair.save(group.run_dirs, config.seeds, done.cycles)
-
     try:
         for c in range(done.cycles + 1, config.cycles + 1):
             if hooks.stop is not None and hooks.stop.is_set():
@@ -80,13 +73,12 @@ def train_settings(setup: Setup, settings: list[tuple[TrainConfig, Path]], hooks
                 hooks.on_cycle()
             display.cycle(c, [history[-1] for history in done.histories])
             if c % config.checkpoint_every == 0 or c == config.cycles or c in config.keep_cycles:
-                save(done)
+                saver.save(done)
             if hooks.widen is not None and c < config.cycles:
                 done = program.widen(done, hooks.widen, config.cycles - c)
                 saver.group = program.group
     except KeyboardInterrupt:
-        if done.cycles > saver.saved:
-            save(done)
+        saver.save_if_behind(done)
         raise Interrupted(done.cycles) from None
     except WriteError:
         writable = False
@@ -101,9 +93,11 @@ class SlotProgram:
     """The group's cycle compiled for its devices, each cycle timed: its first (which compiles) apart,
     so that `widen` can tell whether more devices pay for compiling it again."""
 
-    def __init__(self, group: RunGroup):
+    def __init__(self, group: RunGroup, resumed_at: int = 0):
         self.group, self.cycle = group, Cycle(group.setup, group.slots, group.configs)
         self.repair = ModelRepair(group.setup, group.slots.num_seeds) if group.setup.approach.repairs_model else None
+        if self.repair is not None and resumed_at:
+            self.repair.restore(group.run_dirs, resumed_at, self.cycle)
         self.times = CycleTimes()
         self.compiling_s, self.device_s, self.seed_cycles = 0.0, 0.0, 0  # for the pace (`pace`)
 
@@ -120,6 +114,11 @@ class SlotProgram:
             self.seed_cycles += self.group.slots.num_seeds
         self.times.timed(seconds)
         return done
+
+    def save_beside(self, cycle: int) -> None:
+        """What the runs resume from besides their checkpoints of `cycle` (a model repair's models)."""
+        if self.repair is not None and self.group.primary:
+            self.repair.save(self.group.run_dirs, self.group.setup.config.seeds, cycle)
 
     def pace(self) -> dict | None:
         """Device-seconds per seed-cycle once compiled, and the seconds of the cycles that compiled (each
