@@ -4,7 +4,8 @@ Per task (host, once per model): index the invented ground atoms after the env's
 the model's invented predicates to the task's objects), and tabulate the plan found from the first state.
 A state off that plan asks the host planner, as any table miss does. The host planner grounds the model
 as `planning.plan` does, every atom no operator changes static (read from the state asked about), and
-plans by A* with h_ff; where the model has no plan, the env's own model answers.
+plans with search.py (A* with h_ff over helpful actions); where the model has no plan, the env's own
+model answers.
 
 The device holds no learned grounding: a learned operator is a code (`core/learned_atoms.py`) naming its
 lifted operator, its sampler's input row and its slot. The table's operators are the env model's, the
@@ -30,8 +31,9 @@ from jaxbridge.core.tasks import TaskArrays, TaskBatch, compiled_task
 from jaxbridge.learn.model.model import LearnedModel
 from jaxbridge.learn.model.operators import typed_objects
 from jaxbridge.learn.model.predicates import PLACE_TOLERANCE, AllAt, Before, Either, Literal, SamePlace, Span
+from jaxbridge.learn.model.search import find_plan
 from jaxbridge.learn.model.segments import TaskReader, View
-from planner.heuristic import astar
+from planner.heuristic import Relaxation
 from planner.search import NO_OPERATOR, BitOperator, PolicyEntry
 from planner.strips import Atom, GroundOperator, Problem, ground
 from planner.tables import CompiledTask, bits_to_words, num_words, register_planner, stack_tables
@@ -69,7 +71,8 @@ def task_model(env: NoveltyEnv, spec, model: LearnedModel) -> TaskModel:
     state = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec)))
     seen = jax.tree.map(np.asarray, env.objects(state))
     view = reader.view(seen.type_id, seen.features, seen.position, np.asarray(env.abstract(state)))
-    objects, problem = typed_objects(view, model.domain), env.planner_problem(spec)
+    # sorted: the grounding's order, so its plans, must not follow the hash order of a set
+    objects, problem = dict(sorted(typed_objects(view, model.domain).items())), env.planner_problem(spec)
     invented = [(name, *args) for name, types in model.domain.predicates.items() if name in model.grammar.signatures
                 for args in itertools.product(*[[o for o, t in objects.items() if t == ty] for ty in types])]
     return TaskModel(env, model, view, objects, problem.static, problem.goal, reader.atoms, tuple(invented))
@@ -83,7 +86,7 @@ class LearnedPlanner:
     task: TaskModel
     fallback: object  # planner.search.HostPlanner over the env's atoms
     cache: dict[int, PolicyEntry] = field(default_factory=dict)
-    groundings: dict[frozenset[Atom], tuple[list[GroundOperator], list[BitOperator]]] = field(default_factory=dict)
+    groundings: dict[frozenset[Atom], tuple[list[GroundOperator], Relaxation]] = field(default_factory=dict)
 
     @functools.cached_property
     def derived(self) -> frozenset[str]:
@@ -106,8 +109,9 @@ class LearnedPlanner:
         return self.cache[state]
 
     def _plan(self, state: int) -> None:
-        ops, bit_ops = self._grounding(frozenset(a for a in self.task.atoms(state) if a[0] in self.derived))
-        found = astar(bit_ops, self.goal, state).plan
+        ops, relaxation = self._grounding(frozenset(a for a in self.task.atoms(state) if a[0] in self.derived))
+        bit_ops = relaxation.ops
+        found = find_plan(bit_ops, self.goal, state, relaxation)
         if found is None:
             self.cache[state] = self.fallback.decide(state & ((1 << self.task.env.num_atoms) - 1))
             return
@@ -117,12 +121,14 @@ class LearnedPlanner:
             state = nxt
         self.cache.setdefault(state, PolicyEntry(NO_OPERATOR, state, 0))
 
-    def _grounding(self, derived: frozenset[Atom]) -> tuple[list[GroundOperator], list[BitOperator]]:
-        """The model grounded with `derived` atoms (and the env's static ones) static."""
+    def _grounding(self, derived: frozenset[Atom]) -> tuple[list[GroundOperator], Relaxation]:
+        """The model grounded with `derived` atoms (and the env's static ones) static, and the delete
+        relaxation of its bit operators (kept: a task's derived atoms take few values)."""
         if derived not in self.groundings:
             task = self.task
             ops = ground(Problem(task.model.domain, task.objects, task.static | derived, frozenset(), task.goal))
-            self.groundings[derived] = ops, [BitOperator(task.bits(o.pre), task.bits(o.add), task.bits(o.delete)) for o in ops]
+            bit_ops = [BitOperator(task.bits(o.pre), task.bits(o.add), task.bits(o.delete)) for o in ops]
+            self.groundings[derived] = ops, Relaxation(bit_ops)
         return self.groundings[derived]
 
     def _code(self, op: GroundOperator) -> int:
