@@ -90,7 +90,7 @@ def parse_args(argv):
                              "seeds that look right but fail, and how often it is looked at by the action chosen")
     parser.add_argument("--planner-alone", action="store_true",
                         help="with a RUN of ours_model_repair: its learned model's planner alone, no bridge (a stall "
-                             "is a failure), on the RUN's tasks (its test tasks, --test-protocol's or --task-size's)")
+                             "is a failure), on the RUN's tasks (its test tasks, --test-protocol's, --task-size's or --sweep's)")
     parser.add_argument("--cycle", type=positive_int, default=None, metavar="N",
                         help="with RUNs: evaluate the checkpoint saved after cycle N (a run keeps its latest two and "
                              "those of train.py --keep-cycles) (default: the latest)")
@@ -116,7 +116,7 @@ def check_flags(args) -> None:
                 (len(args.runs) == 2 and drawing, "--render/--gif draw an episode of one run; give one RUN"),
                 (not args.runs and args.task_size is not None, "--task-size evaluates a trained RUN on larger tasks; give a RUN"),
                 (args.attention and len(args.runs) != 1, "--attention reports on one RUN's evaluation; give one RUN"),
-                (args.planner_alone and len(args.runs) != 1, "--planner-alone evaluates one RUN's learned planner; give one RUN"),
+                (args.planner_alone and len(args.runs) != 1 and not args.sweep, "--planner-alone evaluates one RUN (or --sweep's)"),
                 (args.test_protocol is not None and args.runs and (args.sweep is not None or args.task_size is not None),
                  "--test-protocol picks a RUN's test tasks; it does not combine with --sweep or --task-size"),
                 (args.cycle is not None and (not args.runs or args.sweep is not None),
@@ -150,7 +150,7 @@ def sweep(args) -> int:
     start = time.perf_counter()
     result = jaxbridge.sweep_novelties(jaxbridge.sweep_lines(args.runs, args.approach),
                                        args.sweep_tasks or jaxbridge.SWEEP_TASKS, args.sweep_seed or 0, args.rollout_seed,
-                                       progress=lambda label: print(f"  {label} ...", flush=True))
+                                       progress=lambda label: print(f"  {label} ...", flush=True), planner_alone=args.planner_alone)
     print(f"{result.title} ({time.perf_counter() - start:.1f} s including compilation)")
     print(result.markdown(), end="")
     result.write(out)

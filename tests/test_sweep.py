@@ -62,6 +62,9 @@ class FakePolicy:
     def can_see(self, env) -> bool:
         return env.full_state_fits or not self.full_state
 
+    def planned(self, batch):  # a run without a learned model plans its tasks as they are
+        return batch
+
     def run(self, batch, seed=0):
         self.batches.append(batch)
         success = np.array([len(spec.door_cells) in self.solves[s] for spec, s in zip(batch.specs, batch.seeds)])

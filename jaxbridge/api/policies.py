@@ -1,6 +1,8 @@
 """Bridges to evaluate and draw: a run's trained policy (`load`) or a hand-made bridge (`hand_made`)."""
 from __future__ import annotations
 
+import copy
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
@@ -148,12 +150,17 @@ class Policy(Bridges):
         """A repair run's (ours_model_repair) learned planner alone on `evaluate`'s tasks (`which_tasks`, as
         there): no bridge, so a stall ends in failure (the planner plans again from the state it stalled in,
         and stalls again). InputError for a run that learns no model."""
+        return self.alone().evaluate(rollout_seed=rollout_seed, **which_tasks)
+
+    def alone(self) -> "Policy":
+        """This run's learned planner with no bridge, as a Policy (InputError for a run that learns no model)."""
         if self.trained.models is None:
             raise InputError(f"{self.config.approach} learns no planner model: the planner alone is a model repair "
                              f"run's (ours_model_repair)")
-        alone = HandMade(self.config.env, "none", self.config.test_protocol)
+        alone = copy.copy(self)
+        alone.trained = dataclasses.replace(self.trained, planner_alone=True)
         alone.label = f"learned planner alone of {self.config.approach}, cycle {self.cycle}"
-        return alone.episodes(self.tasks(**which_tasks), rollout_seed)
+        return alone
 
     def attention(self, episodes: Episodes, rollout_seed: int = 0):
         """What a learned object selector (ours_learned_selection) looks at on `episodes`' tasks: per seed,

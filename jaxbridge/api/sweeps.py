@@ -66,12 +66,15 @@ def sweep_lines(runs: list[str | Path], approach: str | None = None) -> dict[str
 
 
 def sweep_novelties(lines: Mapping[str, str | Path | Policy], tasks_per_count: int = SWEEP_TASKS,
-                    sweep_seed: int = 0, rollout_seed: int = 0,
-                    progress: Callable[[str], None] = lambda label: None) -> NoveltySweep:
+                    sweep_seed: int = 0, rollout_seed: int = 0, progress: Callable[[str], None] = lambda label: None,
+                    planner_alone: bool = False) -> NoveltySweep:
     """Each line's policy (a Policy or a run directory) greedily on the env's sweep tasks: for each count of
     novelty instances (`env.novelty_sweep`), `tasks_per_count` tasks drawn from `sweep_seed`, the same for
-    every seed and line. `progress(label)` is called as each line starts."""
+    every seed and line; with `planner_alone`, each repair run's learned planner with no bridge
+    (`Policy.alone`). `progress(label)` is called as each line starts."""
     policies = {label: p if isinstance(p, Policy) else Policy(p) for label, p in lines.items()}
+    if planner_alone:
+        policies = {label: p.alone() for label, p in policies.items()}
     with refusing():  # runs of several envs, an env without a sweep
         result = evaluate_sweep({label: p.trained for label, p in policies.items()}, tasks_per_count, sweep_seed,
                                 rollout_seed, progress=progress)

@@ -10,7 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxbridge.core.bridges import Bridge
+from jaxbridge.core.bridges import Bridge, PurePlanningBridge
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.meta_policy import Controls, EpisodeResult, MetaPolicy, rollout
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
@@ -97,6 +97,7 @@ class TrainedPolicy:
     step: int  # the checkpoint's cycle
     learners: Any  # stacked over config.seeds
     models: dict | None = None  # a repair run's learned models by seed (run/model_repair.py), its planner's
+    planner_alone: bool = False  # its learned planner with no bridge (a repair run's)
 
     @property
     def config(self) -> TrainConfig:
@@ -116,11 +117,18 @@ class TrainedPolicy:
         return env.full_state_fits or not self.approach.controls.observation.whole_state
 
     def on(self, batch: TaskBatch) -> tuple[Bridge, Any, Controls]:
-        """(bridge, per-episode greedy params, controls) for the batch: each episode gets its seed's network."""
+        """(bridge, per-episode greedy params, controls) for the batch: each episode gets its seed's network
+        (none with `planner_alone`)."""
         index = {seed: i for i, seed in enumerate(self.config.seeds)}
         if not set(batch.seeds.tolist()) <= index.keys():
             raise ValueError(f"the batch has tasks of seeds this run did not train ({self.config.seeds})")
+        if self.planner_alone:
+            return PurePlanningBridge(batch.env), None, Controls()
         return self.setup.greedy_policy(batch.env, self.learners, np.array([index[s] for s in batch.seeds.tolist()]))
+
+    def planned(self, batch: TaskBatch) -> TaskBatch:
+        """`batch` planned as the run plans: with its seeds' learned models (a repair run's), else as it is."""
+        return batch if self.models is None else planned_with(batch, self.models)
 
     def run(self, batch: TaskBatch, seed: int = 0) -> EpisodeResult:
         bridge, greedy, controls = self.on(batch)
@@ -171,8 +179,7 @@ def policy_tasks(policy: TrainedPolicy, sized_specs=None, num_tasks: int = 10, m
         sweep = env_cls.novelty_sweep if sized else None  # its horizon rule scales with the tasks' size
         batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None,
                            progress=SlowWork(f"{env_cls.name}: {'sized' if sized else 'given'} tasks and plan tables"))
-    batch = dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks))
-    return batch if policy.models is None else planned_with(batch, policy.models)
+    return policy.planned(dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks)))
 
 
 def format_comparison(evaluations: dict[str, list[SeedSummary]]) -> str:

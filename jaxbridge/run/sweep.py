@@ -73,7 +73,7 @@ def evaluate_sweep(policies: dict[str, TrainedPolicy], tasks_per_count: int = 10
             key = (tuple(seeds), visible)
             if key not in batches:
                 batches[key] = sweep_batch(env_cls, list_of(specs, chosen), seeds)
-            success = policy.run(batches[key], rollout_seed).success.reshape(len(seeds), -1)
+            success = policy.run(policy.planned(batches[key]), rollout_seed).success.reshape(len(seeds), -1)
             for j, k in enumerate(sweep.counts):
                 if k in visible:
                     rate[:, j] = success[:, counts[chosen] == k].mean(axis=1)
