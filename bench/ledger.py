@@ -1,7 +1,7 @@
 """The test-seed ledger, docs/results/ledger.csv: one row for every run on a test-seed set, appended when
 the run starts (dirty tree or not), so that a reader can see every time a set was used and why.
 
-    python -m bench.ledger --env coffee --ran "train.py --env coffee --first-seed 200 ..." \\
+    python -m bench.ledger --env coffee --seeds 200-231 --ran "train.py --env coffee --first-seed 200 ..." \\
         --change "the step discount (step_gamma 0.99)" --chosen-on "development seeds 0-31"
 
 The studies (bench/study.py) append their row themselves when they start on test seeds; this command is
@@ -10,7 +10,7 @@ A row: the date, the seed set, the env, what ran, the code's commit (with "+chan
 dirty), what changed since that set's previous run of the same study and on which seeds the change was
 chosen. `python -m bench.pages.render` shows the ledger in docs/results/ledger.md.
 
-    python -m bench.ledger --spent "the learned selector" --first-seed 300 --change "its Coffee result ..."
+    python -m bench.ledger --spent "the learned selector" --seeds 300-331 --change "its Coffee result ..."
 
 writes a row that records no run: the set is spent for that subject (a result seen there motivated a
 change to it), its fields say so.
@@ -72,16 +72,13 @@ def seed_set(first: int, count: int) -> str:
 
 
 def main(argv=None) -> int:
-    parser = CommandParser(__spec__.name, __doc__)
+    first = min(TEST_SETS)
+    parser = CommandParser(__spec__.name, __doc__, seeds=f"{first}-{first + TEST_SETS[first] - 1}", test_seeds=True)
     parser.add_argument("--env", help="the env the run trained or evaluated on (required unless --spent)")
     parser.add_argument("--ran", help="the command that ran, as typed (required unless --spent)")
     parser.add_argument("--spent", metavar="SUBJECT",
                         help="record no run: the seed set is spent for SUBJECT (e.g. \"the learned selector\"); "
                              "--change says which result motivated which change")
-    parser.add_argument("--first-seed", type=int, default=min(TEST_SETS),
-                        help=f"its first seed (default: %(default)s; the sets: {', '.join(map(str, TEST_SETS))})")
-    parser.add_argument("--num-seeds", type=int, default=TEST_SETS[min(TEST_SETS)],
-                        help="how many seeds it ran (default: %(default)s)")
     parser.add_argument("--commit", help="the code's commit it ran at (default: this checkout's, +changes if dirty)")
     parser.add_argument("--change", help="what changed since this seed set's previous run of the same study and why, in a "
                                          "line (\"first run\" for the first); with --spent: which result spent the set")
@@ -89,7 +86,7 @@ def main(argv=None) -> int:
                                             "a first run)")
     args = parser.parse_args(argv)
     try:
-        seeds = seed_set(args.first_seed, args.num_seeds)
+        seeds = seed_set(args.seed_list[0], len(args.seed_list))
     except ValueError as err:
         print(f"bench.ledger: {err}", file=sys.stderr)
         return 2

@@ -111,22 +111,22 @@ def test_code_changed_during_a_clean_run_writes_no_record(tmp_path, own_ledger, 
 
 
 def test_the_ledger_command_appends_a_row_and_refuses_seeds_outside_the_sets(own_ledger, capsys):
-    assert ledger.main(["--env", "doorknobs", "--ran", "train.py --env doorknobs --first-seed 300", "--first-seed", "300",
+    assert ledger.main(["--env", "doorknobs", "--ran", "train.py --env doorknobs --first-seed 300", "--seeds", "300-331",
                         "--change", "a new kind of door", "--chosen-on", "development seeds 0-31", "--commit", "abc"]) == 0
     (row,) = ledger.rows()
     assert (row["seeds"], row["commit"], row["chosen_on"]) == ("300-331", "abc", "development seeds 0-31")
-    assert ledger.main(["--env", "doorknobs", "--ran", "x", "--first-seed", "100", *REASON]) == 2
+    assert ledger.main(["--env", "doorknobs", "--ran", "x", "--seeds", "100-131", *REASON]) == 2
     assert "not within a test-seed set" in capsys.readouterr().err and len(ledger.rows()) == 1
 
 
 def test_a_spent_row_records_no_run_and_says_why(own_ledger, capsys):
-    assert ledger.main(["--spent", "the learned selector", "--first-seed", "300", "--change", "a result seen there",
+    assert ledger.main(["--spent", "the learned selector", "--seeds", "300-331", "--change", "a result seen there",
                         "--commit", "abc"]) == 0
     (row,) = ledger.rows()
     assert ledger.is_spent(row) and row["ran"] == "no run: the set is spent for the learned selector"
     assert (row["seeds"], row["change"], row["chosen_on"]) == ("300-331", "spent: a result seen there", "no run: nothing was chosen")
-    assert ledger.main(["--spent", "the learned selector", "--first-seed", "300"]) == 2  # without its reason
-    assert ledger.main(["--env", "coffee", "--first-seed", "300", "--change", "x", "--chosen-on", "y"]) == 2  # a run without --ran
+    assert ledger.main(["--spent", "the learned selector", "--seeds", "300-331"]) == 2  # without its reason
+    assert ledger.main(["--env", "coffee", "--seeds", "300-331", "--change", "x", "--chosen-on", "y"]) == 2  # a run without --ran
     assert capsys.readouterr().err.count("\n") == 2 and len(ledger.rows()) == 1
 
 
