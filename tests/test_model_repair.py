@@ -18,6 +18,7 @@ from jaxbridge.learn.model.segments import TaskReader
 from jaxbridge.learn.online import make_train
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.evaluate import batch_rollout, run_bridge
+from jaxbridge.run.model_repair import ModelRepair
 from jaxbridge.run.runner import Interrupted, train
 from planner import read_domain
 
@@ -103,3 +104,18 @@ def test_the_given_predicates_approach_is_refused_for_an_env_that_declares_none(
     with pytest.raises(ValueError, match="declares none"):
         make_setup(config, LockedBox)
     make_setup(dataclasses.replace(config, approach="ours_model_repair"), LockedBox)
+
+
+def test_a_relearned_model_that_solves_fewer_training_tasks_is_not_kept(model):
+    """Between two models of a slot the keeper takes the new one unless its planner alone solves fewer of the
+    seed's training tasks: the env's own operators (no repair) do not replace the learned model, and the
+    learned model replaces them."""
+    config = jaxbridge.make_config("multi_novelty", approach="ours_model_repair", num_seeds=1, episodes_per_cycle=2,
+                                   num_test_tasks=2)
+    repair = ModelRepair(make_setup(config), slots=1)
+    unrepaired = dataclasses.replace(model, domain=dataclasses.replace(model.domain, operators=model.base_operators))
+    assert repair.kept_model(0, unrepaired) is unrepaired  # a slot's first model is kept as it is
+    repair.models[0] = model
+    assert repair.kept_model(0, unrepaired) is model
+    repair.models[0] = unrepaired
+    assert repair.kept_model(0, model) is model

@@ -3,7 +3,8 @@ learned from them, and its tasks planned with that model.
 
 After a cycle, every slot's training episodes are cut into segments (the planner's stalls and the
 bridge's fixes among them) and the most recent `KEPT_SEGMENTS` kept. After cycles 1, 2, 4, 8, ... each
-slot's model is learned again from them and its training and test tasks are planned with it
+slot's model is learned again from them (kept only where its planner alone solves at least as many of the
+slot's training tasks as the model before it) and its training and test tasks are planned with it
 (learn/model/device.py): a doubling schedule, so early cycles get a model from their first fixes while a
 long run relearns only log2(cycles) times.
 
@@ -20,6 +21,7 @@ import numpy as np
 
 from jaxbridge.core.tasks import TaskArrays, TaskBatch
 from jaxbridge.learn.model.device import model_batch
+from jaxbridge.learn.model.execute import run_planner_alone
 from jaxbridge.learn.model.model import LearnedModel, learn_model
 from jaxbridge.learn.model.segments import Segment, segments_from_records
 from jaxbridge.learn.online import Cycle
@@ -56,12 +58,26 @@ class ModelRepair:
             del kept[:-KEPT_SEGMENTS]
         if relearns_after(cycle_number):
             progress = SlowWork(f"{self.setup.config.env}: planner models learned after cycle {cycle_number}")
-            self.models = []
-            for kept in self.segments:
-                given = self.setup.approach.given_predicates
-                self.models.append(learn_model(self.setup.env_cls, kept, given=given) if kept else None)
-                progress(len(self.models), len(self.segments))
+            for slot, kept in enumerate(self.segments):
+                if kept:
+                    learned = learn_model(self.setup.env_cls, kept, given=self.setup.approach.given_predicates)
+                    self.models[slot] = self.kept_model(slot, learned)
+                progress(slot + 1, len(self.segments))
             self.retask(cycle)
+
+    def kept_model(self, slot: int, learned: LearnedModel) -> LearnedModel:
+        """`learned`, unless its planner alone solves fewer of the slot's training tasks than the slot's
+        current model's does (a model relearned from more calls can draw a worse threshold; only training
+        tasks decide, never test tasks)."""
+        current = self.models[slot]
+        if current is None:
+            return learned
+        train, seeds = self.setup.train, self.setup.config.num_seeds
+        per_seed = train.size // seeds
+        first = (slot % seeds) * per_seed
+        tasks = dict(zip(train.specs[first:first + per_seed], np.asarray(train.horizons)[first:first + per_seed]))
+        solved = lambda model: sum(run_planner_alone(train.env, model, spec, int(h)).success for spec, h in tasks.items())
+        return current if solved(current) > solved(learned) else learned
 
     def retask(self, cycle: Cycle) -> None:
         """`cycle`'s tasks planned with the slots' models, once every slot has one."""
