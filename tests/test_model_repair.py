@@ -25,8 +25,8 @@ from planner import read_domain
 BOTH_LOCKS = "held_out"  # Multi Novelty's protocol of doors with both locks, which no training task holds
 
 
-def _interrupt_at_cycle_2(cycle: int, learners):
-    if cycle == 2:
+def _interrupt_at_cycle_4(cycle: int, learners):
+    if cycle == 4:
         raise KeyboardInterrupt
     return learners
 
@@ -71,16 +71,17 @@ def test_the_learned_models_tables_take_doors_with_both_locks_to_the_goal_on_the
 
 
 def test_a_repair_run_relearns_writes_its_domains_and_resumes_exactly(tmp_path):
-    """Two cycles straight, and one cycle, Ctrl-C, then a resumed one: the same metrics (the second cycle plans
-    with the model learned after the first); the seed's domain as PDDL that reads back; the run evaluated
+    """Four cycles straight, and three, Ctrl-C, then a resumed one: the same metrics (the fourth cycle plans
+    with the model learned after the second, its host planner fresh after the resume and not after the
+    third cycle's questions); the seed's domain as PDDL that reads back; the run evaluated
     with its model, whose planner alone takes doors with both locks to the goal."""
-    config = jaxbridge.make_config("multi_novelty", approach="ours_model_repair", num_seeds=1, cycles=2,
+    config = jaxbridge.make_config("multi_novelty", approach="ours_model_repair", num_seeds=1, cycles=4,
                                    episodes_per_cycle=4, num_test_tasks=3, updates_per_cycle=2, checkpoint_every=1)
     for run in ("straight", "halted"):
         (tmp_path / run).mkdir()
     train(make_setup(config), tmp_path / "straight")
     with pytest.raises(Interrupted):
-        train(make_setup(config), tmp_path / "halted", fault_injection=_interrupt_at_cycle_2)
+        train(make_setup(config), tmp_path / "halted", fault_injection=_interrupt_at_cycle_4)
     train(make_setup(config), tmp_path / "halted", resume=True)
     assert (tmp_path / "halted" / "metrics.csv").read_text() == (tmp_path / "straight" / "metrics.csv").read_text()
     domain = read_domain((tmp_path / "straight" / "models" / "seed0.pddl").read_text())

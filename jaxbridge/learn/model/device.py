@@ -80,8 +80,8 @@ def task_model(env: NoveltyEnv, spec, model: LearnedModel) -> TaskModel:
 
 @dataclass
 class LearnedPlanner:
-    """A learned model's host planner for one task: A* (h_ff) from any state, each plan's states cached;
-    the env model's planner (`fallback`) where the learned one finds no plan."""
+    """A learned model's host planner for one task: the first operator of a plan from any state (search.py),
+    cached by state; the env model's planner (`fallback`) where the learned one finds no plan."""
 
     task: TaskModel
     fallback: object  # planner.search.HostPlanner over the env's atoms
@@ -109,17 +109,19 @@ class LearnedPlanner:
         return self.cache[state]
 
     def _plan(self, state: int) -> None:
+        # Only the state asked about is cached: an answer is a function of the state alone, whatever was
+        # asked before (a plan's later states asked directly may get another plan), so a resumed run plans
+        # as the run it continues.
         ops, relaxation = self._grounding(frozenset(a for a in self.task.atoms(state) if a[0] in self.derived))
-        bit_ops = relaxation.ops
-        found = find_plan(bit_ops, self.goal, state, relaxation)
+        found = find_plan(relaxation.ops, self.goal, state, relaxation)
         if found is None:
             self.cache[state] = self.fallback.decide(state & ((1 << self.task.env.num_atoms) - 1))
-            return
-        for k, i in enumerate(found):
-            nxt = (state & ~bit_ops[i].delete) | bit_ops[i].add
-            self.cache.setdefault(state, PolicyEntry(self._code(ops[i]), nxt & self.checked, len(found) - k))
-            state = nxt
-        self.cache.setdefault(state, PolicyEntry(NO_OPERATOR, state, 0))
+        elif not found:
+            self.cache[state] = PolicyEntry(NO_OPERATOR, state, 0)
+        else:
+            first = relaxation.ops[found[0]]
+            nxt = (state & ~first.delete) | first.add
+            self.cache[state] = PolicyEntry(self._code(ops[found[0]]), nxt & self.checked, len(found))
 
     def _grounding(self, derived: frozenset[Atom]) -> tuple[list[GroundOperator], Relaxation]:
         """The model grounded with `derived` atoms (and the env's static ones) static, and the delete
