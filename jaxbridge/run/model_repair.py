@@ -8,8 +8,9 @@ slot's training tasks as the model before it) and its training and test tasks ar
 (learn/model/device.py): a doubling schedule, so early cycles get a model from their first fixes while a
 long run relearns only log2(cycles) times.
 
-Beside each checkpoint a run keeps what it resumes from, `model_repair/<cycle>.pkl` (its slots' segments
-and models), and its seeds' latest learned domains as PDDL, `models/seed<N>.pddl`.
+Beside each checkpoint a run keeps what it resumes from, `model_repair/<cycle>.pkl` (its slots' segments,
+models and host planners' answers, which are its tables' rows), and its seeds' latest learned domains as
+PDDL, `models/seed<N>.pddl`.
 """
 from __future__ import annotations
 
@@ -19,8 +20,8 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from jaxbridge.core.tasks import TaskArrays, TaskBatch
-from jaxbridge.learn.model.device import model_batch
+from jaxbridge.core.tasks import TaskArrays, TaskBatch, compiled_task
+from jaxbridge.learn.model.device import LearnedPlanner, model_batch, task_model
 from jaxbridge.learn.model.execute import run_planner_alone
 from jaxbridge.learn.model.model import LearnedModel, learn_model
 from jaxbridge.learn.model.segments import Segment, segments_from_records
@@ -46,9 +47,11 @@ class ModelRepair:
         self.setup = setup
         self.segments: list[list[Segment]] = [[] for _ in range(slots)]
         self.models: list[LearnedModel | None] = [None] * slots
+        self.planners: dict = {}  # (slot, spec, env) -> its host planner (learn/model/device.model_batch)
 
     def after_cycle(self, cycle_number: int, cycle: Cycle) -> None:
-        """Keep the cycle's segments; on the schedule, relearn every slot's model and retask `cycle`."""
+        """Keep the cycle's segments; on the schedule, relearn every slot's model; retask `cycle` (its tables
+        then hold every state the host planners answered so far)."""
         train, records = self.setup.train, jax.tree.map(np.asarray, cycle.seeds.unpad(cycle.records))
         per_seed = train.size // self.setup.config.num_seeds
         for slot, kept in enumerate(self.segments):
@@ -63,7 +66,7 @@ class ModelRepair:
                     learned = learn_model(self.setup.env_cls, kept, given=self.setup.approach.given_predicates)
                     self.models[slot] = self.kept_model(slot, learned)
                 progress(slot + 1, len(self.segments))
-            self.retask(cycle)
+        self.retask(cycle)
 
     def kept_model(self, slot: int, learned: LearnedModel) -> LearnedModel:
         """`learned`, unless its planner alone solves fewer of the slot's training tasks than the slot's
@@ -91,7 +94,7 @@ class ModelRepair:
         owner = [slot for slot in range(len(self.models)) for _ in range(per_seed)]
         specs = [batch.specs[(slot % seeds) * per_seed + k] for slot in range(len(self.models)) for k in range(per_seed)]
         horizons = np.tile(np.asarray(batch.horizons).reshape(seeds, per_seed), (len(self.models) // seeds, 1)).ravel()
-        planned = model_batch(batch.env, specs, owner, dict(enumerate(self.models)), list(horizons))
+        planned = model_batch(batch.env, specs, owner, dict(enumerate(self.models)), list(horizons), self.planners)
         return jax.tree.map(lambda x: np.reshape(np.asarray(x), (len(self.models), per_seed) + x.shape[1:]), planned.arrays)
 
     def save(self, run_dirs: list[Path], seeds: list[int], cycle_number: int) -> None:
@@ -99,7 +102,9 @@ class ModelRepair:
         checkpoint is gone are deleted), and its seeds' latest domains as PDDL."""
         for i, run_dir in enumerate(run_dirs):
             mine = slice(i * len(seeds), (i + 1) * len(seeds))
-            state = {"segments": self.segments[mine], "models": self.models[mine]}
+            caches = [(slot - mine.start, spec, env, planner.cache) for (slot, spec, env), planner in self.planners.items()
+                      if mine.start <= slot < mine.stop]
+            state = {"segments": self.segments[mine], "models": self.models[mine], "caches": caches}
             for folder in ("model_repair", "models"):
                 (run_dir / folder).mkdir(exist_ok=True)
             write_atomic(run_dir / "model_repair" / f"{cycle_number}.pkl", pickle.dumps(state))
@@ -113,11 +118,15 @@ class ModelRepair:
 
     def restore(self, run_dirs: list[Path], cycle_number: int, cycle: Cycle) -> None:
         """The state saved beside cycle `cycle_number`'s checkpoints, and `cycle` retasked with its models."""
-        self.segments, self.models = [], []
+        self.segments, self.models, caches = [], [], []
         for run_dir in run_dirs:
             state = pickle.loads((run_dir / "model_repair" / f"{cycle_number}.pkl").read_bytes())
+            caches += [(len(self.models) + slot, *rest) for slot, *rest in state["caches"]]
             self.segments += state["segments"]
             self.models += state["models"]
+        for slot, spec, env, cache in caches:  # the planners' answers as they were: the tables' rows
+            task = task_model(env, spec, self.models[slot])
+            self.planners[slot, spec, env] = LearnedPlanner(task, compiled_task(env, spec).planner, cache=cache)
         self.retask(cycle)
 
 

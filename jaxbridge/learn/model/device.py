@@ -45,6 +45,7 @@ class TaskModel:
     layout (the env's fluent atoms at their indices, the invented ones after them)."""
 
     env: NoveltyEnv
+    spec: object
     model: LearnedModel
     view: View
     objects: dict[str, str]
@@ -75,7 +76,7 @@ def task_model(env: NoveltyEnv, spec, model: LearnedModel) -> TaskModel:
     objects, problem = dict(sorted(typed_objects(view, model.domain).items())), env.planner_problem(spec)
     invented = [(name, *args) for name, types in model.domain.predicates.items() if name in model.grammar.signatures
                 for args in itertools.product(*[[o for o, t in objects.items() if t == ty] for ty in types])]
-    return TaskModel(env, model, view, objects, problem.static, problem.goal, reader.atoms, tuple(invented))
+    return TaskModel(env, spec, model, view, objects, problem.static, problem.goal, reader.atoms, tuple(invented))
 
 
 @dataclass
@@ -87,6 +88,8 @@ class LearnedPlanner:
     fallback: object  # planner.search.HostPlanner over the env's atoms
     cache: dict[int, PolicyEntry] = field(default_factory=dict)
     groundings: dict[frozenset[Atom], tuple[list[GroundOperator], Relaxation]] = field(default_factory=dict)
+    uid: int = 0  # its plan tables' name for it (register_planner), once registered
+    model_tables: dict[tuple[int, int], ModelTable] = field(default_factory=dict)  # by capacities
 
     @functools.cached_property
     def derived(self) -> frozenset[str]:
@@ -180,28 +183,30 @@ def _model_table(task: TaskModel, atoms: int, operators: int) -> ModelTable:
                       sampled, low, high, slots=env.num_objects, place_tolerance=PLACE_TOLERANCE)
 
 
-def compile_model_task(env: NoveltyEnv, spec, model: LearnedModel, atoms: int, operators: int,
-                       task: TaskModel | None = None) -> CompiledTask:
-    """Task `spec`'s plan table under `model`: the env model's operators, the plan from the first state,
-    the learned model's part at capacities `atoms` (invented atoms) and `operators` (lifted operators)."""
-    own, task = compiled_task(env, spec), task or task_model(env, spec, model)
-    words = num_words(env.num_atoms + atoms)
-    planner = LearnedPlanner(task, own.planner)
-    init = task.bits(model.atoms(task.view))
+def compile_model_task(planner: LearnedPlanner, atoms: int, operators: int) -> CompiledTask:
+    """`planner`'s task's plan table: the env model's operators; as rows the plan from the first state and
+    every state the planner has answered (a task met again finds them in the table); the learned model's
+    part at capacities `atoms` (invented atoms) and `operators` (lifted operators)."""
+    task = planner.task
+    own, words = compiled_task(task.env, task.spec), num_words(task.env.num_atoms + atoms)
+    init = task.bits(task.model.atoms(task.view))
     states, state = [], init
     while (entry := planner.decide(state)).op != NO_OPERATOR and state not in states:
         states.append(state)
         state = entry.next_state | (state & ~planner.checked)  # what the model predicts, the rest as it was
-    states = states or [init]  # a table has a row: the first state's, answered by the host planner
+    states = list(dict.fromkeys(states + [s for s, e in planner.cache.items() if e.op != NO_OPERATOR])) or [init]
+    if (atoms, operators) not in planner.model_tables:
+        planner.model_tables[atoms, operators] = _model_table(task, atoms, operators)
+    planner.uid = planner.uid or register_planner(planner)
     key = lambda s: bits_to_words(s, words)
-    widen = lambda x: np.pad(x, ((0, 0), (0, words - x.shape[1])))
     table = own.table.replace(
-        uid=np.int32(register_planner(planner)), goal_key=key(planner.goal),
+        uid=np.int32(planner.uid), goal_key=key(planner.goal),
         state_keys=np.stack([key(s) for s in states]), state_valid=np.ones(len(states), bool),
         next_op=np.array([planner.decide(s).op for s in states], np.int32),
         next_keys=np.stack([key(planner.decide(s).next_state) for s in states]),
-        op_pre=widen(own.table.op_pre), model=_model_table(task, atoms, operators))
-    return CompiledTask(int(table.uid), own.problem, own.ground_ops, planner, init, table, len(states))
+        op_pre=np.pad(own.table.op_pre, ((0, 0), (0, words - own.table.op_pre.shape[1]))),
+        model=planner.model_tables[atoms, operators])
+    return CompiledTask(planner.uid, own.problem, own.ground_ops, planner, init, table, len(states))
 
 
 def _with_rows(table, rows: int):
@@ -217,13 +222,20 @@ def _capacity(n: int) -> int:
 
 
 def model_batch(env: NoveltyEnv, specs: list, owners: list[int], models: dict[int, LearnedModel],
-                horizons: list[int] | None = None) -> TaskBatch:
+                horizons: list[int] | None = None, planners: dict | None = None) -> TaskBatch:
     """A batch of `specs` (task b owned by `owners[b]`, under `env`, sized for them all) planned with each
-    owner's learned model (owners are seeds, or a sweep's slots)."""
-    tasks = {(o, s): task_model(env, s, models[o]) for o, s in dict.fromkeys(zip(owners, specs))}
-    atoms = _capacity(max(len(t.invented) for t in tasks.values()))
+    owner's learned model (owners are seeds, or a sweep's slots). `planners`: each (owner, spec, env)'s
+    LearnedPlanner kept between batches (reused while the owner's model is the same), so a later batch's
+    tables hold the states the planners answered."""
+    planners = {} if planners is None else planners
+    for owner, spec in dict.fromkeys(zip(owners, specs)):
+        kept = planners.get((owner, spec, env))
+        if kept is None or kept.task.model is not models[owner]:
+            planners[owner, spec, env] = LearnedPlanner(task_model(env, spec, models[owner]), compiled_task(env, spec).planner)
+    mine = {(o, s): planners[o, s, env] for o, s in dict.fromkeys(zip(owners, specs))}
+    atoms = _capacity(max(len(p.task.invented) for p in mine.values()))
     operators = _capacity(max(len(m.domain.operators) for m in models.values()))
-    compiled = {k: compile_model_task(env, k[1], t.model, atoms, operators, t) for k, t in tasks.items()}
+    compiled = {k: compile_model_task(p, atoms, operators) for k, p in mine.items()}
     horizons = [s.horizon for s in specs] if horizons is None else horizons
     chosen = [compiled[o, s] for o, s in zip(owners, specs)]
     rows = _capacity(max(c.table.state_keys.shape[0] for c in chosen))
