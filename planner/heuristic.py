@@ -111,7 +111,8 @@ def _evaluator(heuristic, ops, goal):
     return prepare(ops, goal) if prepare else (lambda s: heuristic(ops, s, goal))
 
 
-def _plan(parent: dict[int, tuple[int, int]], state: int) -> list[int]:
+def path_to(parent: dict[int, tuple[int, int]], state: int) -> list[int]:
+    """The operators from the search's root to `state`, through each state's (parent, operator)."""
     plan = []
     while state in parent:
         state, op = parent[state]
@@ -140,7 +141,7 @@ def astar(ops: list[BitOperator], goal: int, root: int, heuristic=h_ff) -> Searc
         if g > best_g[state]:
             continue  # a stale entry: the state was reached more cheaply since
         if state & goal == goal:
-            return SearchResult(_plan(parent, state), expanded, next(order) - 1)
+            return SearchResult(path_to(parent, state), expanded, next(order) - 1)
         expanded += 1
         candidates = sorted(always + [i for bit in _bits(state) for i in keyed.get(bit, ())])
         for op, nxt in successors(ops, state, candidates):

@@ -115,10 +115,9 @@ def _static_bindings(variables: list[str], choices: list[list[str]], static_pre:
     yield from extend(0, {})
 
 
-def ground(problem: Problem, fluent: frozenset[str] | None = None) -> list[GroundOperator]:
-    """All bindings of every operator whose static preconditions hold, in a deterministic order;
-    `fluent`: the predicates kept as preconditions (default: the domain's; every other one is static)."""
-    fluent = problem.domain.fluent_predicates if fluent is None else fluent
+def ground(problem: Problem) -> list[GroundOperator]:
+    """All bindings of every operator whose static preconditions hold, in a deterministic order."""
+    fluent = problem.domain.fluent_predicates
     by_type: dict[str, list[str]] = {}
     for name, typ in problem.objects.items():
         by_type.setdefault(typ, []).append(name)

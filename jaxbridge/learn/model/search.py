@@ -15,7 +15,7 @@ from __future__ import annotations
 import heapq
 import itertools
 
-from planner.heuristic import Relaxation, _bits
+from planner.heuristic import Relaxation, _bits, path_to
 from planner.search import BitOperator, by_lowest_precondition, successors
 
 # The searches find_plan tries in turn: (helpful actions only, h_ff's weight). On Doorknobs' 7x7 maps with 10
@@ -41,14 +41,6 @@ def relaxed_plan(relaxation: Relaxation, state: int, goal: int) -> frozenset[int
     return frozenset(chosen)
 
 
-def _path(parent: dict[int, tuple[int, int]], state: int) -> list[int]:
-    plan = []
-    while state in parent:
-        state, op = parent[state]
-        plan.append(op)
-    return plan[::-1]
-
-
 def astar(relaxation: Relaxation, goal: int, root: int, helpful_only: bool, weight: int = 1,
           budget: int = EVALUATIONS) -> list[int] | None:
     """Weighted A* (unit costs, f = g + weight h_ff) from `root` to a state holding `goal`: operator indices, or None when
@@ -68,7 +60,7 @@ def astar(relaxation: Relaxation, goal: int, root: int, helpful_only: bool, weig
         if g > best_g[state]:
             continue  # reached more cheaply since
         if state & goal == goal:
-            return _path(parent, state)
+            return path_to(parent, state)
         helpful = estimate[state]
         candidates = sorted(always + [i for bit in _bits(state) for i in keyed.get(bit, ())])
         for op, nxt in successors(ops, state, candidates):
