@@ -143,12 +143,11 @@ def planner_turn(env: NoveltyEnv, ep: Episode, atoms: jax.Array, plan: PlanLooku
 
     op = jnp.maximum(plan.op, 0)
     skill, slot = table.op_skill[op], table.op_slot[op]
+    param = env.param_from_uniform(skill, u_param)
     if table.model is not None:  # a learned model's operator: a code of its skill, slot and sampler
         learned = learned_call(table.model, plan.op, env.objects(state))
         skill, slot = jnp.where(learned.learned, learned.skill, skill), jnp.where(learned.learned, learned.slot, slot)
-    param = env.param_from_uniform(skill, u_param)
-    if table.model is not None:
-        param = jnp.where(learned.learned & learned.sampled, learned.param, param)
+        param = jnp.where(learned.learned & learned.sampled, learned.param, env.param_from_uniform(skill, u_param))
     planner_call = SkillCall(skill=skill, slot=slot, param=param, running=jnp.bool_(True), steps=jnp.int32(0))
     abandoned = ep.call.replace(running=ep.call.running & ~stuck)
     ep = ep.replace(

@@ -135,7 +135,7 @@ SIGNATURE = {a.name: a for a in (
 )}
 
 # The bridge's experience into the planner's model (issue 76; docs/design/model_learning.md): ours, and
-# between cycles the planner's model relearned from every skill call so far (its stalls, the bridge's
+# between cycles the planner's model relearned from the recent skill calls (its stalls, the bridge's
 # fixes), so that its plans compose fixes and the bridge acts only where they stall. Not among "all".
 MODEL_REPAIR = {a.name: a for a in (
     Approach("ours_model_repair", "ours, model repair", BridgeKind.Q, Controls(),

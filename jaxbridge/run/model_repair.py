@@ -20,8 +20,8 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from jaxbridge.core.tasks import TaskArrays, TaskBatch, compiled_task
-from jaxbridge.learn.model.device import LearnedPlanner, model_batch, task_model
+from jaxbridge.core.tasks import TaskArrays, TaskBatch
+from jaxbridge.learn.model.device import LearnedPlanner, model_batch
 from jaxbridge.learn.model.execute import run_planner_alone
 from jaxbridge.learn.model.model import LearnedModel, learn_model
 from jaxbridge.learn.model.segments import Segment, segments_from_records
@@ -48,16 +48,15 @@ class ModelRepair:
         self.segments: list[list[Segment]] = [[] for _ in range(slots)]
         self.models: list[LearnedModel | None] = [None] * slots
         self.planners: dict = {}  # (slot, spec, env) -> its host planner (learn/model/device.model_batch)
+        self.tabled = -1  # the planners' answers the cycle's tables hold (-1: none of theirs yet)
 
     def after_cycle(self, cycle_number: int, cycle: Cycle) -> None:
-        """Keep the cycle's segments; on the schedule, relearn every slot's model; retask `cycle` (its tables
-        then hold every state the host planners answered so far)."""
-        train, records = self.setup.train, jax.tree.map(np.asarray, cycle.seeds.unpad(cycle.records))
-        per_seed = train.size // self.setup.config.num_seeds
+        """Keep the cycle's segments; on the schedule, relearn every slot's model; retask `cycle` where that
+        changed a model or the host planners answered states its tables lack."""
+        records = jax.tree.map(np.asarray, cycle.seeds.unpad(cycle.records))
         for slot, kept in enumerate(self.segments):
-            first = (slot % self.setup.config.num_seeds) * per_seed
-            slot_records = jax.tree.map(lambda x: x[slot], records)
-            kept += segments_from_records(train.env, train.specs[first:first + per_seed], slot_records)
+            specs, _ = self.seed_tasks(self.setup.train, slot)
+            kept += segments_from_records(self.setup.train.env, specs, jax.tree.map(lambda x: x[slot], records))
             del kept[:-KEPT_SEGMENTS]
         if relearns_after(cycle_number):
             progress = SlowWork(f"{self.setup.config.env}: planner models learned after cycle {cycle_number}")
@@ -66,7 +65,15 @@ class ModelRepair:
                     learned = learn_model(self.setup.env_cls, kept, given=self.setup.approach.given_predicates)
                     self.models[slot] = self.kept_model(slot, learned)
                 progress(slot + 1, len(self.segments))
-        self.retask(cycle)
+            self.tabled = -1
+        if self.tabled != sum(len(planner.cache) for planner in self.planners.values()):
+            self.retask(cycle)
+
+    def seed_tasks(self, batch: TaskBatch, slot: int) -> tuple[list, np.ndarray]:
+        """The specs and horizons of `batch` (seed-major) that belong to the slot's seed."""
+        per_seed = batch.size // self.setup.config.num_seeds
+        first = (slot % self.setup.config.num_seeds) * per_seed
+        return batch.specs[first:first + per_seed], np.asarray(batch.horizons)[first:first + per_seed]
 
     def kept_model(self, slot: int, learned: LearnedModel) -> LearnedModel:
         """`learned`, unless its planner alone solves fewer of the slot's training tasks than the slot's
@@ -75,27 +82,27 @@ class ModelRepair:
         current = self.models[slot]
         if current is None:
             return learned
-        train, seeds = self.setup.train, self.setup.config.num_seeds
-        per_seed = train.size // seeds
-        first = (slot % seeds) * per_seed
-        tasks = dict(zip(train.specs[first:first + per_seed], np.asarray(train.horizons)[first:first + per_seed]))
-        solved = lambda model: sum(run_planner_alone(train.env, model, spec, int(h)).success for spec, h in tasks.items())
+        tasks = dict(zip(*self.seed_tasks(self.setup.train, slot)))
+        env = self.setup.train.env
+        solved = lambda model: sum(run_planner_alone(env, model, spec, int(h)).success for spec, h in tasks.items())
         return current if solved(current) > solved(learned) else learned
 
     def retask(self, cycle: Cycle) -> None:
-        """`cycle`'s tasks planned with the slots' models, once every slot has one."""
+        """`cycle`'s tasks planned with the slots' models, once every slot has one; its tables then hold every
+        state the host planners answered so far."""
         if all(model is not None for model in self.models):
             cycle.retask(self.planned(self.setup.train), self.planned(self.setup.test))
+            self.tabled = sum(len(planner.cache) for planner in self.planners.values())
 
     def planned(self, batch: TaskBatch) -> TaskArrays:
         """Every slot's tasks of `batch` (seed-major) planned with its model: TaskArrays [slots, n, ...]."""
-        seeds = self.setup.config.num_seeds
-        per_seed = batch.size // seeds
-        owner = [slot for slot in range(len(self.models)) for _ in range(per_seed)]
-        specs = [batch.specs[(slot % seeds) * per_seed + k] for slot in range(len(self.models)) for k in range(per_seed)]
-        horizons = np.tile(np.asarray(batch.horizons).reshape(seeds, per_seed), (len(self.models) // seeds, 1)).ravel()
-        planned = model_batch(batch.env, specs, owner, dict(enumerate(self.models)), list(horizons), self.planners)
-        return jax.tree.map(lambda x: np.reshape(np.asarray(x), (len(self.models), per_seed) + x.shape[1:]), planned.arrays)
+        slots = range(len(self.models))
+        owner, specs, horizons = [], [], []
+        for slot in slots:
+            mine, their_horizons = self.seed_tasks(batch, slot)
+            owner, specs, horizons = owner + [slot] * len(mine), specs + list(mine), horizons + their_horizons.tolist()
+        planned = model_batch(batch.env, specs, owner, dict(enumerate(self.models)), horizons, self.planners)
+        return jax.tree.map(lambda x: np.reshape(np.asarray(x), (len(slots), -1) + x.shape[1:]), planned.arrays)
 
     def save(self, run_dirs: list[Path], seeds: list[int], cycle_number: int) -> None:
         """Each run's slots' segments and models beside its checkpoint of `cycle_number` (older ones whose
@@ -125,8 +132,7 @@ class ModelRepair:
             self.segments += state["segments"]
             self.models += state["models"]
         for slot, spec, env, cache in caches:  # the planners' answers as they were: the tables' rows
-            task = task_model(env, spec, self.models[slot])
-            self.planners[slot, spec, env] = LearnedPlanner(task, compiled_task(env, spec).planner, cache=cache)
+            self.planners[slot, spec, env] = LearnedPlanner.of(env, spec, self.models[slot], cache)
         self.retask(cycle)
 
 

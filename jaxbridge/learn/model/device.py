@@ -58,12 +58,20 @@ class TaskModel:
     def index(self) -> dict[Atom, int]:
         return {a: i for i, a in self.env_atoms.items()} | {a: self.env.num_atoms + j for j, a in enumerate(self.invented)}
 
+    @functools.cached_property
+    def atom_at(self) -> dict[int, Atom]:
+        return {i: a for a, i in self.index.items()}
+
+    @property
+    def env_mask(self) -> int:
+        """The bits of the env's own atoms."""
+        return (1 << self.env.num_atoms) - 1
+
     def bits(self, atoms) -> int:
         return sum(1 << self.index[a] for a in atoms if a in self.index)
 
     def atoms(self, state: int) -> frozenset[Atom]:
-        at = {i: a for a, i in self.index.items()}
-        return frozenset(at[i] for i in range(state.bit_length()) if state >> i & 1 and i in at)
+        return frozenset(self.atom_at[i] for i in range(state.bit_length()) if state >> i & 1 and i in self.atom_at)
 
 
 def task_model(env: NoveltyEnv, spec, model: LearnedModel) -> TaskModel:
@@ -91,6 +99,11 @@ class LearnedPlanner:
     uid: int = 0  # its plan tables' name for it (register_planner), once registered
     model_tables: dict[tuple[int, int], ModelTable] = field(default_factory=dict)  # by capacities
 
+    @classmethod
+    def of(cls, env: NoveltyEnv, spec, model: LearnedModel, cache: dict | None = None) -> "LearnedPlanner":
+        """Task `spec`'s planner under `model`, with the answers of `cache` (a saved planner's)."""
+        return cls(task_model(env, spec, model), compiled_task(env, spec).planner, dict(cache or {}))
+
     @functools.cached_property
     def derived(self) -> frozenset[str]:
         """The model's predicates no operator changes: static within a plan, read from the state."""
@@ -100,7 +113,7 @@ class LearnedPlanner:
     def checked(self) -> int:
         """The bits a prediction covers: the env's atoms and the invented ones some operator changes."""
         made = self.task.model.domain.fluent_predicates
-        return (1 << self.task.env.num_atoms) - 1 | self.task.bits(a for a in self.task.invented if a[0] in made)
+        return self.task.env_mask | self.task.bits(a for a in self.task.invented if a[0] in made)
 
     @property
     def goal(self) -> int:
@@ -118,7 +131,7 @@ class LearnedPlanner:
         ops, relaxation = self._grounding(frozenset(a for a in self.task.atoms(state) if a[0] in self.derived))
         found = find_plan(relaxation.ops, self.goal, state, relaxation)
         if found is None:
-            self.cache[state] = self.fallback.decide(state & ((1 << self.task.env.num_atoms) - 1))
+            self.cache[state] = self.fallback.decide(state & self.task.env_mask)
         elif not found:
             self.cache[state] = PolicyEntry(NO_OPERATOR, state, 0)
         else:
@@ -231,7 +244,7 @@ def model_batch(env: NoveltyEnv, specs: list, owners: list[int], models: dict[in
     for owner, spec in dict.fromkeys(zip(owners, specs)):
         kept = planners.get((owner, spec, env))
         if kept is None or kept.task.model is not models[owner]:
-            planners[owner, spec, env] = LearnedPlanner(task_model(env, spec, models[owner]), compiled_task(env, spec).planner)
+            planners[owner, spec, env] = LearnedPlanner.of(env, spec, models[owner])
     mine = {(o, s): planners[o, s, env] for o, s in dict.fromkeys(zip(owners, specs))}
     atoms = _capacity(max(len(p.task.invented) for p in mine.values()))
     operators = _capacity(max(len(m.domain.operators) for m in models.values()))
