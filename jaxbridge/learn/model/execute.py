@@ -26,24 +26,37 @@ class PlannedEpisode:
     ended: str  # "goal", "no plan", "stalled" or "horizon"
 
 
-def _skill_step(env: NoveltyEnv, state, call: SkillCall):
-    """One env step of the running skill: (next state, the skill's end, whether the state changed by the
+@partial(jax.jit, static_argnums=0)
+def _run_skill(env: NoveltyEnv, state, call: SkillCall, budget):
+    """The skill call run to its end or for `budget` env steps, in one compiled loop (compiled once per env,
+    an env being equal by value): (state reached, steps taken, whether any step changed the state by the
     meta-policy's repeated-state test)."""
-    nxt = env.step(state, env.skill_action(state, call))
-    nxt = env.after_skill_step(state, nxt, call)
-    return nxt, env.skill_done(state, nxt, call), ~same_state(env.state_vector(nxt), env.state_vector(state))
+    def step(carry):
+        state, steps, changed, _ = carry
+        running = call.replace(steps=call.steps + steps)
+        nxt = env.after_skill_step(state, env.step(state, env.skill_action(state, running)), running)
+        moved = ~same_state(env.state_vector(nxt), env.state_vector(state))
+        return nxt, steps + 1, changed | moved, env.skill_done(state, nxt, running)
+
+    state, steps, changed, _ = jax.lax.while_loop(lambda c: ~c[3] & (c[1] < budget), step,
+                                                  (state, jnp.int32(0), jnp.bool_(False), jnp.bool_(False)))
+    return state, steps, changed
+
+
+@partial(jax.jit, static_argnums=0)
+def _objects(env: NoveltyEnv, state):
+    return env.objects(state), env.abstract(state)
 
 
 def _observed(env: NoveltyEnv, reader: TaskReader, state):
-    objects = jax.tree.map(np.asarray, env.objects(state))
-    return reader.view(objects.type_id, objects.features, objects.position, np.asarray(env.abstract(state)))
+    objects, abstract = jax.tree.map(np.asarray, _objects(env, state))
+    return reader.view(objects.type_id, objects.features, objects.position, abstract)
 
 
 def run_planner_alone(env: NoveltyEnv, model: LearnedModel, spec, horizon: int | None = None) -> PlannedEpisode:
     """One episode of `spec` acted by the learned model's plans alone."""
     reader, goal, planner = TaskReader(env, spec), env.planner_problem(spec).goal, ModelPlanner(model)
     horizon = spec.horizon if horizon is None else horizon
-    step = jax.jit(partial(_skill_step, env))
     state, steps, ran = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec))), 0, []
     planned, expected = [], None  # the plan's operators left, and the atoms the model predicts now
     while steps < horizon:
@@ -62,11 +75,9 @@ def run_planner_alone(env: NoveltyEnv, model: LearnedModel, spec, horizon: int |
         param = sampler(view, op.slot_object) if sampler else (spec_of.param_low + spec_of.param_high) / 2
         slot = env.object_slot(op.slot_object) if op.slot_object else 0
         call = SkillCall(jnp.int32(env.skill_index(op.skill)), jnp.int32(slot), jnp.float32(param), jnp.bool_(True), jnp.int32(0))
-        changed, done = False, False
-        while not done and steps < horizon:
-            state, done, moved = step(state, call)
-            call, steps, changed = call.replace(steps=call.steps + 1), steps + 1, changed or bool(moved)
+        state, taken, changed = _run_skill(env, state, call, jnp.int32(horizon - steps))
+        steps += int(taken)
         ran.append(str(op))
-        if not changed:
+        if not bool(changed):
             return PlannedEpisode(False, steps, tuple(ran), "stalled")
     return PlannedEpisode(bool(env.goal_reached(state)), steps, tuple(ran), "goal" if env.goal_reached(state) else "horizon")

@@ -61,8 +61,9 @@ def learn_model(env_cls: type[NoveltyEnv], segments: list[Segment], given: bool 
     new_skills = {op.skill for op in domain.operators if not op.add and not op.delete}
     # a skill the model knows is learned only for what a repaired precondition needs: its other changes
     # (an arm that rises after a twist) would tie the variant to preconditions no operator makes
-    vocabulary = lambda skill: set(domain.predicates) | chosen | relations | (literals if skill in new_skills else set())
-    known = lambda view, skill: frozenset(a for a in atoms(view) if a[0] in vocabulary(skill))
+    vocabulary = {skill: set(domain.predicates) | chosen | relations | (literals if skill in new_skills else set())
+                  for skill in {s.skill for s in segments}}
+    known = lambda view, skill: frozenset(a for a in atoms(view) if a[0] in vocabulary[skill])
     # spans are read, never made: only a precondition may use them (each plan reads them afresh)
     effects = [(s, before, after, before | grammar.span_atoms(s.before)) for s in segments
                for before, after in [(known(s.before, s.skill), known(s.after, s.skill))]
