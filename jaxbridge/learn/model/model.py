@@ -48,8 +48,7 @@ def learn_model(env_cls: type[NoveltyEnv], segments: list[Segment], given: bool 
         grammar = given_grammar(data, env_cls.novelty_predicates)
     else:
         grammar = make_grammar(data, _cuts(calls, make_grammar(data), data))
-    cache: dict[int, frozenset[Atom]] = {}
-    atoms = lambda view, base=grammar: cache.setdefault(id(view), view.given | base.atoms(view))
+    atoms = _memo_atoms(grammar)
     examples = {name: _examples(found, atoms) for name, found in calls.items()}
     repaired = [variant for op in domain.operators if op.name in examples for variant in repair(op, examples[op.name], grammar)]
     chosen = {a[0] for op in repaired for a in op.pre} - set(domain.predicates)
@@ -79,6 +78,17 @@ def learn_model(env_cls: type[NoveltyEnv], segments: list[Segment], given: bool 
     types = tuple(dict.fromkeys(domain.types + tuple(env_cls.object_types)))
     learned = Domain(f"{domain.name}-learned", types, predicates, tuple(repaired + added))
     return LearnedModel(learned, grammar, _samplers(env_cls, added, clusters, grammar), domain.operators)
+
+
+def _memo_atoms(grammar: Grammar):
+    """view -> its model atoms and `grammar`'s, each view's read once (segments share their end views)."""
+    cache: dict[int, tuple[object, frozenset[Atom]]] = {}
+
+    def atoms(view) -> frozenset[Atom]:
+        if id(view) not in cache:
+            cache[id(view)] = (view, view.given | grammar.atoms(view))  # the view held: its id stays its own
+        return cache[id(view)][1]
+    return atoms
 
 
 def _model_calls(op: LiftedOperator, segments: list[Segment], domain: Domain) -> list[tuple[Segment, dict[str, str], bool]]:

@@ -76,7 +76,13 @@ def segments_from_records(env: NoveltyEnv, specs: list, records) -> list[Segment
         if spec not in readers:
             readers[spec] = TaskReader(env, spec)
         reader = readers[spec]
-        view = lambda t: reader.view(type_id[t, b], features[t, b], position[t, b], abstract[t, b])
+        views: dict = {}  # one View per step: a call's end is the next call's start, its atoms read once
+
+        def view(t: int):
+            if t not in views:
+                views[t] = reader.view(type_id[t, b], features[t, b], position[t, b], abstract[t, b])
+            return views[t]
+
         steps = [t for t in np.flatnonzero(live[:, b]) if actor[t, b] in (ACTOR_PLANNER, ACTOR_BRIDGE)]
         call = lambda t: (actor[t, b], skill[t, b], slot[t, b], param[t, b])
         start = None
