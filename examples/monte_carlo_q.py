@@ -57,8 +57,6 @@ def discounted_returns(transitions: Transition, valid: jax.Array, gamma: jax.Arr
     return jax.lax.scan(backwards, jnp.float32(0.0), (transitions.reward, transitions.done, valid), reverse=True)[1]
 
 
-# Adam without its step size: `learn` steps by hyper.learning_rate, a leaf (a sweep gives each setting its own).
-ADAM = optax.scale_by_adam()
 
 
 @dataclass(frozen=True)
@@ -70,20 +68,24 @@ class MonteCarloQ:
     settings: MonteCarloSettings
     shares_network: bool = True
 
+    @property
+    def adam(self) -> optax.GradientTransformation:
+        return optax.adam(self.settings.learning_rate)  # in a cycle, the slot's learning rate (a traced leaf)
+
     def init(self, key: jax.Array) -> MonteCarloState:
         k_init, k_run = jax.random.split(key)
         width = input_size(self.env, self.num_features)
         params = self.net.init(k_init, jnp.zeros((1, width), jnp.float32))
         rows = self.settings.memory * self.rows
-        return MonteCarloState(params=params, opt_state=ADAM.init(params), key=k_run,
+        return MonteCarloState(params=params, opt_state=self.adam.init(params), key=k_run,
                                decisions=jnp.int32(0), cycles=jnp.int32(0), inputs=jnp.zeros((rows, width), jnp.float32),
                                returns=jnp.zeros(rows, jnp.float32), valid=jnp.zeros(rows, bool))
 
     def greedy(self, state: MonteCarloState) -> Any:
         return state.params
 
-    def observe(self, hyper, state: MonteCarloState, transitions: Transition, valid: jax.Array) -> MonteCarloState:
-        returns = jax.vmap(discounted_returns, in_axes=(0, 0, None))(transitions, valid, hyper.gamma)
+    def observe(self, state: MonteCarloState, transitions: Transition, valid: jax.Array) -> MonteCarloState:
+        returns = jax.vmap(discounted_returns, in_axes=(0, 0, None))(transitions, valid, self.settings.gamma)
         inputs = encode(self.env, transitions.features, transitions.skill, transitions.param)
         at = (state.cycles % self.settings.memory) * self.rows
         put = lambda memory, new: jax.lax.dynamic_update_slice_in_dim(
@@ -91,7 +93,7 @@ class MonteCarloQ:
         return state.replace(inputs=put(state.inputs, inputs), returns=put(state.returns, returns),
                              valid=put(state.valid, valid), cycles=state.cycles + 1)
 
-    def learn(self, hyper, state: MonteCarloState, decisions: jax.Array, tasks: Any):
+    def learn(self, state: MonteCarloState, decisions: jax.Array, tasks: Any):
         weight = state.valid.astype(jnp.float32)
 
         def loss_fn(params):
@@ -101,8 +103,8 @@ class MonteCarloQ:
         def step(carry, _):
             params, opt_state = carry
             (loss, q_abs), grads = jax.value_and_grad(loss_fn, has_aux=True)(params)
-            moments, opt_state = ADAM.update(grads, opt_state)
-            params = jax.tree.map(lambda p, m: p - hyper.learning_rate * m, params, moments)
+            updates, opt_state = self.adam.update(grads, opt_state)
+            params = optax.apply_updates(params, updates)
             return (params, opt_state), (loss, q_abs)
 
         (params, opt_state), (losses, q_abs) = jax.lax.scan(step, (state.params, state.opt_state), None,

@@ -6,15 +6,14 @@ import jax.numpy as jnp
 
 from examples.monte_carlo_q import MonteCarloQ, MonteCarloSettings, make_learner
 from jaxbridge.core.learner_settings import learner_settings
-from jaxbridge.learn.hyper import Hyper
 
 
 @dataclass(frozen=True)
 class GrowingState(MonteCarloQ):
     """observe keeps only the decisions, so the state's shape would change from cycle to cycle."""
 
-    def observe(self, hyper, state, transitions, valid):
-        state = super().observe(hyper, state, transitions, valid)
+    def observe(self, state, transitions, valid):
+        state = super().observe(state, transitions, valid)
         return state.replace(returns=state.returns[:-1])
 
 
@@ -22,19 +21,9 @@ class GrowingState(MonteCarloQ):
 class VectorLoss(MonteCarloQ):
     """learn returns the loss of every epoch instead of their mean."""
 
-    def learn(self, hyper, state, decisions, tasks):
-        state, loss, q_abs = super().learn(hyper, state, decisions, tasks)
+    def learn(self, state, decisions, tasks):
+        state, loss, q_abs = super().learn(state, decisions, tasks)
         return state, jnp.full(3, loss), q_abs
-
-
-@dataclass(frozen=True)
-class StaticLearningRate(MonteCarloQ):
-    """learn steps by its settings' learning_rate, not hyper's: a sweep over it would train every setting
-    at one value."""
-
-    def learn(self, hyper, state, decisions, tasks):
-        static = Hyper(**{**hyper.values, "learning_rate": self.settings.learning_rate})
-        return super().learn(static, state, decisions, tasks)
 
 
 @learner_settings(MonteCarloSettings)
@@ -45,8 +34,3 @@ def growing_state(*args):
 @learner_settings(MonteCarloSettings)
 def vector_loss(*args):
     return VectorLoss(*vars(make_learner(*args)).values())
-
-
-@learner_settings(MonteCarloSettings)
-def static_learning_rate(*args):
-    return StaticLearningRate(*vars(make_learner(*args)).values())

@@ -1,7 +1,7 @@
 """The learner contract (jaxbridge/learn/learner.py): both built-in learners pass `check_learner`, broken ones are
 refused naming the method, PQN's Q(lambda) targets are the formula's, PQN resumes exactly and evaluates, the
 example learner of docs/NEW_LEARNER.md trains from the command line, and a sweep over a leaf setting trains each value
-(a learner reads it from `hyper`, never from its settings)."""
+(each slot's learner is made from its own settings, its leaves traced)."""
 import csv
 import json
 from dataclasses import replace
@@ -123,16 +123,3 @@ def test_a_sweep_over_the_example_learners_learning_rate_trains_each_value():
     assert fast["q_abs_max"][0, 0] > 100 * slow["q_abs_max"][0, 0]
     assert fast["loss"][0, 0] < 0.9 * slow["loss"][0, 0]
 
-
-def test_a_learner_that_reads_a_leaf_setting_from_its_settings_is_refused(tmp_path):
-    # Its settings hold the leaf's name, not a number: it cannot train every setting of a sweep at one value.
-    spec = "tests.plugin_learners:static_learning_rate"
-    config = TrainConfig(learner=spec)
-    message = ("StaticLearningRate.learn: raised LeafReadError: learning_rate is a leaf setting: a learner reads it as "
-               "hyper.learning_rate")
-    with pytest.raises(LearnerContractError, match=message):
-        check_learner(make_setup(config).learner, config)
-    proc = cli_in_process("train.py", "--learner", spec, "--approaches", "ours", "--num-seeds", "1",
-                          "--sweep", "learning_rate=1e-6,3e-2", "--out", str(tmp_path))
-    one_line_error(proc, 2, f"--learner: {message}")
-    assert not any(tmp_path.iterdir())

@@ -16,9 +16,7 @@ import jaxbridge
 from jaxbridge.core import grid
 from jaxbridge.core.config import CONFIG_VERSION, TrainConfig
 from jaxbridge.core.learner_settings import BUILT_IN, DQNSettings, PQNSettings
-from jaxbridge.core.settings import LeafReadError, LeafSetting
 from jaxbridge.learn.hyper import Hyper
-from jaxbridge.learn.learners import factory_config
 
 V11_RUN = Path(__file__).parent / "data" / "v11_run"
 ROOT = Path(__file__).resolve().parents[1]
@@ -53,16 +51,12 @@ def test_a_preset_leaves_out_what_the_learner_lacks_and_the_hyper_leaves_are_the
         grid.parse_sweeps(["learner=dqn,pqn"])
 
 
-def test_a_learners_factory_gets_its_leaf_settings_as_names_that_refuse_to_be_numbers():
-    # One learner serves every setting of a sweep: equal for two that differ in a leaf, which it reads from hyper.
-    low, high = (TrainConfig(learner="pqn", learning_rate=rate) for rate in (1e-4, 3e-2))
-    view = factory_config(low)
-    assert view == factory_config(high) and hash(view) == hash(factory_config(high))
-    assert (view.learner.pqn_epochs, view.n_sample, view.learner.learning_rate) == (4, 100, LeafSetting("learning_rate"))
-    for use in (float, lambda leaf: -leaf, lambda leaf: leaf * 2.0, lambda leaf: leaf == 1e-4, bool):
-        with pytest.raises(LeafReadError, match="q_lambda is a leaf setting: a learner reads it as hyper.q_lambda"):
-            use(view.q_lambda)
-    assert low.learner.learning_rate == 1e-4  # the run's own settings keep their numbers
+def test_a_slots_settings_hold_its_traced_leaves_and_keep_the_rest():
+    # In a cycle each slot's learner is made from settings whose leaves are that slot's values.
+    config = TrainConfig(learner="pqn", learning_rate=1e-4, pqn_epochs=8)
+    traced = config.with_leaves({**config.leaf_values(), "learning_rate": 0.5, "epsilon_end": 0.25})
+    assert (traced.learner.learning_rate, traced.epsilon_end, traced.learner.pqn_epochs) == (0.5, 0.25, 8)
+    assert traced.static_values() == config.static_values() and config.learner.learning_rate == 1e-4
 
 
 def test_help_lists_the_chosen_learners_settings():

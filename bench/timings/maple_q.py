@@ -74,7 +74,7 @@ def cycle_parts(setup: Setup, learner) -> dict[str, Callable]:
         transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None, None, None))(
             records, result.success, setup.train_env.num_skills, hyper.call_planner_bonus, config.counts_steps,
             controls.plan_progress)
-        return learning.observe(hyper, learner, transitions, valid)
+        return learning.observe(learner, transitions, valid)
 
     @jax.jit
     def test_rollout(learner):
@@ -82,7 +82,7 @@ def cycle_parts(setup: Setup, learner) -> dict[str, Callable]:
         policy = MetaPolicy(setup.test_env, setup.bridge(setup.test_env), greedy, controls, shared_params=shared)
         return rollout(policy, test, keys(config.num_test_tasks), setup.test.max_steps, host_planner=False)[0]
 
-    learn = jax.jit(lambda learner: learning.learn(hyper, learner, jnp.int32(1), train.tasks))
+    learn = jax.jit(lambda learner: learning.learn(learner, jnp.int32(1), train.tasks))
     seed_cycle = jax.jit(make_seed_cycle(setup, host_planner=False))
     result, records = train_rollout(learner)
     return {"train_rollout": partial(train_rollout, learner), "observe": partial(observe, learner, result, records),

@@ -7,8 +7,8 @@ text resolves to, and whether `--sweep` may vary it. The help text is the docstr
 field (`field_docs`, utils/cli.py). Everything that checks, parses, sweeps or explains a setting, and
 train.py's flags (utils/cli.add_field_flags), reads these, so a field is declared in one place:
 TrainConfig's own (core/config.py) and each learner's settings class.
-A learner's factory gets its settings with every leaf a `LeafSetting` (`leaves_hidden`), which refuses to
-be a number: the learner reads a leaf from `hyper`, the one place a sweep gives each setting its value.
+In a cycle a learner is made from its slot's settings with every leaf a traced value (`with_leaves`), so
+wherever it reads a leaf, it reads its own slot's: no leaf can stand for a sweep's every setting.
 """
 from __future__ import annotations
 
@@ -60,14 +60,19 @@ class Settings:
         values = {name: value for settings in held for name, value in settings.leaf_values().items()}
         return {**values, **{name: getattr(self, name) for name in self.leaves()}}
 
-    def leaves_hidden(self) -> "Settings":
-        """These settings with each leaf field a `LeafSetting`, as a learner's factory gets them: one learner
-        serves every setting of a sweep, so a leaf's number is read only from `hyper` (learn/hyper.py)."""
-        view = object.__new__(type(self))  # not __init__: the range checks would read the placeholders
+    def with_leaves(self, values) -> "Settings":
+        """These settings with their leaf fields (and those of the settings they hold) from `values` (a
+        mapping or a Hyper, learn/hyper.py), unchecked: in a cycle each slot's are traced values, so a
+        learner made from them reads its own slot's wherever it reads a leaf."""
+        copy = object.__new__(type(self))  # not __init__: the range checks cannot read traced values
         for field in dataclasses.fields(self):
-            hidden = LeafSetting(field.name) if _meta(field, "leaf", False) else getattr(self, field.name)
-            object.__setattr__(view, field.name, hidden)
-        return view
+            value = getattr(self, field.name)
+            if isinstance(value, Settings):
+                value = value.with_leaves(values)
+            elif _meta(field, "leaf", False):
+                value = values[field.name]
+            object.__setattr__(copy, field.name, value)
+        return copy
 
     def static_values(self) -> tuple:
         """Every non-leaf value, those of the settings it holds too: equal for two settings that one compiled
@@ -75,38 +80,6 @@ class Settings:
         return tuple(value.static_values() if isinstance(value, Settings) else value
                      for field in dataclasses.fields(self) if not _meta(field, "leaf", False)
                      for value in [getattr(self, field.name)])
-
-
-class LeafReadError(TypeError, ValueError):
-    """A leaf setting used as a number where only its name is known (a TypeError; a ValueError too, so
-    that train.py refuses it in one line)."""
-
-
-@dataclass(frozen=True)
-class LeafSetting:
-    """A leaf setting in the static settings a learner holds: its name, never its number. Any use as a
-    number raises LeafReadError: a sweep trains every value of a leaf with one learner, and a number read
-    here would be one setting's for all of them."""
-
-    name: str
-
-    def __repr__(self) -> str:
-        return f"<leaf {self.name}: read hyper.{self.name}>"
-
-    def _refuse(self, *args, **kwargs):
-        raise LeafReadError(f"{self.name} is a leaf setting: a learner reads it as hyper.{self.name} in observe and "
-                            f"learn (a --sweep trains each value in one program), not from its settings")
-
-    def __eq__(self, other):  # another placeholder: the learner's equality; a number: a static read
-        return self.name == other.name if isinstance(other, LeafSetting) else self._refuse()
-
-    def __hash__(self) -> int:
-        return hash((LeafSetting, self.name))
-
-    __bool__ = __float__ = __int__ = __index__ = __complex__ = __array__ = _refuse
-    __neg__ = __pos__ = __abs__ = __round__ = __lt__ = __le__ = __gt__ = __ge__ = _refuse
-    __add__ = __radd__ = __sub__ = __rsub__ = __mul__ = __rmul__ = __truediv__ = __rtruediv__ = _refuse
-    __floordiv__ = __rfloordiv__ = __mod__ = __rmod__ = __pow__ = __rpow__ = __matmul__ = __rmatmul__ = _refuse
 
 
 def _check_range(name: str, value, low, high, low_included: bool) -> None:

@@ -110,15 +110,19 @@ class DQN:
     def greedy(self, state: DQNState) -> Any:
         return state.online
 
-    def observe(self, hyper: Hyper, state: DQNState, transitions: Transition, valid: jax.Array) -> DQNState:
+    @property
+    def hyper(self) -> Hyper:
+        """Its config's leaves (traced in a cycle: the slot's), for the functions below."""
+        return Hyper(**self.config.leaf_values())
+
+    def observe(self, state: DQNState, transitions: Transition, valid: jax.Array) -> DQNState:
         """One transition per bridge decision into the replay buffer, episode after episode."""
         flat = lambda x: x.reshape((-1,) + x.shape[2:])
         return state.replace(buffer=add(state.buffer, jax.tree.map(flat, stored_transitions(self, transitions)),
                                         flat(valid)))
 
-    def learn(self, hyper: Hyper, state: DQNState, decisions: jax.Array, tasks: Any
-              ) -> tuple[DQNState, jax.Array, jax.Array]:
-        return learn(self, hyper, state, decisions, tasks)
+    def learn(self, state: DQNState, decisions: jax.Array, tasks: Any) -> tuple[DQNState, jax.Array, jax.Array]:
+        return learn(self, self.hyper, state, decisions, tasks)
 
     def stored(self, state: DQNState) -> jax.Array:
         return state.buffer.size

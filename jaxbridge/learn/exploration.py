@@ -31,7 +31,6 @@ import numpy as np
 from flax import struct
 
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.learner import QLearner
 from jaxbridge.learn.transitions import Transition
 
@@ -103,14 +102,13 @@ class CountExploration:
     def greedy(self, state: CountState) -> Any:
         return self.inner.greedy(state.inner)
 
-    def observe(self, hyper: Hyper, state: CountState, transitions: Transition, valid: jax.Array) -> CountState:
+    def observe(self, state: CountState, transitions: Transition, valid: jax.Array) -> CountState:
         bonus, counts = count_bonus(self.scale, state.counts, transitions, valid)
-        inner = self.inner.observe(hyper, _synced(state), transitions.replace(reward=transitions.reward + bonus), valid)
+        inner = self.inner.observe(_synced(state), transitions.replace(reward=transitions.reward + bonus), valid)
         return state.replace(inner=inner, counts=counts)
 
-    def learn(self, hyper: Hyper, state: CountState, decisions: jax.Array, tasks: Any
-              ) -> tuple[CountState, jax.Array, jax.Array]:
-        inner, loss, q_abs_max = self.inner.learn(hyper, _synced(state), decisions, tasks)
+    def learn(self, state: CountState, decisions: jax.Array, tasks: Any) -> tuple[CountState, jax.Array, jax.Array]:
+        inner, loss, q_abs_max = self.inner.learn(_synced(state), decisions, tasks)
         return state.replace(inner=inner, key=inner.key, decisions=inner.decisions), loss, q_abs_max
 
     def stored(self, state: CountState) -> jax.Array:

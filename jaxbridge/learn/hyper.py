@@ -5,7 +5,9 @@ serves every setting of a sweep (`train.py --sweep`): a slot's numbers are those
 setting, because a plain run passes its one setting the same way. Which settings these are, each field
 says where it is declared (`setting(..., leaf=True)`, core/settings.py): the cycle's own in TrainConfig
 (the epsilon schedule, call_planner_bonus) and the learner's (learning_rate, gamma, ...); everything else
-in the config is static (shapes, programs, switches).
+in the config is static (shapes, programs, switches). The cycle reads its own here and makes each slot's
+learner from the config with these values (learn/setup.Setup.learner_for), so a learner reads them as
+its settings.
 """
 from __future__ import annotations
 

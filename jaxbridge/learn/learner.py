@@ -3,7 +3,9 @@
 The cycle runs the meta-policy's training episodes with the learner's greedy network and epsilon-greedy
 exploration, turns each episode's records into one transition per bridge decision (learn/transitions.py),
 hands them to the learner, lets it learn, and tests its greedy network. A learner is the static side,
-resolved once from the config (a frozen dataclass, hashable: it is part of the compiled program); its
+made from the config (a frozen dataclass, hashable); in a cycle it is made again from each slot's settings,
+their leaves traced (learn/setup.Setup.learner_for), so it reads its hyperparameters from its settings and
+a sweep's every setting trains at its own values. Its
 state is a pytree that the cycle carries, checkpoints and restores. Double DQN (learn/dqn.py) and PQN
 (learn/pqn.py) are the built-in ones; docs/NEW_LEARNER.md shows how to add one, and `check_learner`
 checks one as `check_env` checks an env.
@@ -31,9 +33,8 @@ class LearnerContractError(ValueError):
 class QLearner(Protocol):
     """What a seed's cycle needs of a learner. `state` is the learner's pytree (a flax struct dataclass):
     it must have `key` (a PRNG key the cycle splits and replaces) and `decisions` (int32, the training
-    bridge decisions so far, which the cycle adds to and the exploration schedule reads). `hyper` is the
-    cycle's numeric hyperparameters as leaves (learn/hyper.py), the one place a learner reads them: its
-    settings hold their names alone (learners.factory_config)."""
+    bridge decisions so far, which the cycle adds to and the exploration schedule reads). Its hyperparameters
+    are its settings' (`config.learner`): in a cycle, each slot's learner is made from that slot's values."""
 
     env: NoveltyEnv  # the training env: its capacity fixes the shapes
     net: QNetwork  # the Q-function the bridge calls: net.apply(greedy(state), input) -> Q
@@ -50,11 +51,11 @@ class QLearner(Protocol):
     def greedy(self, state: Any) -> Any:
         """The network variables the bridge acts with (greedily at test time, epsilon-greedily in training)."""
 
-    def observe(self, hyper: Hyper, state: Any, transitions: Transition, valid: jax.Array) -> Any:
+    def observe(self, state: Any, transitions: Transition, valid: jax.Array) -> Any:
         """Take a cycle's transitions, [episodes_per_cycle, train_steps] (one row per env step of each training
         episode; `valid` marks the rows that are bridge decisions): store them, or keep them for `learn`."""
 
-    def learn(self, hyper: Hyper, state: Any, decisions: jax.Array, tasks: Any) -> tuple[Any, jax.Array, jax.Array]:
+    def learn(self, state: Any, decisions: jax.Array, tasks: Any) -> tuple[Any, jax.Array, jax.Array]:
         """Learn after a cycle's episodes (`decisions` of them this cycle; `tasks`: the training tasks).
         Returns (state, mean loss, largest |Q| predicted), both float32 scalars."""
 
@@ -99,7 +100,7 @@ def check_learner(learner: QLearner, config: TrainConfig, tasks: Any = None) -> 
     """Check a learner made for `config` against the contract without computing anything (abstract shapes);
     returns it. LearnerContractError names the first method that breaks it. `tasks`: one seed's training
     tasks, as `learn` gets them."""
-    name, hyper = type(learner).__name__, Hyper.of(config)
+    name = type(learner).__name__
     for attribute in ("env", "net", "num_features", "shares_network", "init", "greedy", "observe", "learn", "stored"):
         _expect(hasattr(learner, attribute), name, f"an attribute {attribute!r} (learn/learner.QLearner)", "none")
     try:
@@ -117,10 +118,10 @@ def check_learner(learner: QLearner, config: TrainConfig, tasks: Any = None) -> 
     q = _calls(f"{name}.greedy", lambda s: learner.net.apply(learner.greedy(s), candidates), state)
     _expect(q.shape == (4,), f"{name}.greedy", "variables for net.apply giving one Q per input row", _shapes(q))
     transitions, valid = example_transitions(learner, config)
-    observed = _calls(f"{name}.observe", learner.observe, hyper, state, transitions, valid)
+    observed = _calls(f"{name}.observe", learner.observe, state, transitions, valid)
     _expect(_shapes(observed) == _shapes(state), f"{name}.observe", "a state of init's shapes and dtypes",
             "another (a state's shapes must not change: the cycle is a scan)")
-    learned = _calls(f"{name}.learn", lambda s: learner.learn(hyper, s, jnp.int32(3), tasks), observed)
+    learned = _calls(f"{name}.learn", lambda s: learner.learn(s, jnp.int32(3), tasks), observed)
     _expect(isinstance(learned, tuple) and len(learned) == 3, f"{name}.learn", "(state, loss, q_abs_max)", type(learned))
     _expect(_shapes(learned[0]) == _shapes(state), f"{name}.learn", "a state of init's shapes and dtypes", "another")
     for label, value in zip(("loss", "q_abs_max"), learned[1:]):

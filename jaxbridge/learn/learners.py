@@ -4,7 +4,6 @@ is the full state; it reads its settings from `config.learner` (their class: cor
 A learner of your own is `package.module:factory` (docs/NEW_LEARNER.md), or `register`ed."""
 from __future__ import annotations
 
-import dataclasses
 from typing import Callable
 
 from envs_jax.base import NoveltyEnv
@@ -43,10 +42,3 @@ def learner_factory(spec: str) -> LearnerFactory:
     if ":" not in spec:
         raise ValueError(f"unknown learner {spec!r}; choose from {', '.join(_REGISTRY)}, or give package.module:factory")
     return plugin_factory(spec)
-
-
-def factory_config(config: TrainConfig) -> TrainConfig:
-    """`config` as a learner's factory gets it: its learner's leaf settings (learning_rate, gamma, ...) are
-    placeholders that refuse to be numbers (core/settings.LeafSetting). The learner made from it trains
-    every setting of a sweep, so it reads those from `hyper`, where each slot has its own."""
-    return dataclasses.replace(config, learner=config.learner.leaves_hidden())

@@ -69,18 +69,19 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     from them, else None)), against the learner contract (learn/learner.py). The same computation for every
     seed and setting. Without `host_planner` its rollouts leave states missing from the plan tables
     unplanned (meta_policy.rollout): exact only where the metrics report no table miss."""
-    config, approach, test, learning = setup.config, setup.approach, setup.test, setup.learner
+    config, approach, test = setup.config, setup.approach, setup.test
     controls = setup.controls
     train_env, test_env = setup.train_env, setup.test_env  # the task batches' envs, with the config's quirks
     train_bridge, test_bridge = setup.bridge(train_env), setup.bridge(test_env)
     episodes, num_tests = config.episodes_per_cycle, config.num_test_tasks
     call_planner = train_env.num_skills
-    shared = learning.shares_network  # one copy of the seed's network for its episodes, or one each
+    shared = setup.learner.shares_network  # one copy of the seed's network for its episodes, or one each
     config.check_buffer_fits()
 
     def seed_cycle(learner: Any, train_tasks: TaskArrays, test_tasks: TaskArrays,
                    hyper: Hyper) -> tuple[Any, CycleMetrics]:
         k_next, k_train, k_learn, k_test = jax.random.split(learner.key, 4)
+        learning = setup.learner_for(hyper)  # the slot's: its leaves are this slot's traced values
 
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
         eps = epsilon(hyper, learner.decisions)
@@ -95,11 +96,11 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
             transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None, None, None))(
                 records, result.success, call_planner, hyper.call_planner_bonus, config.counts_steps,
                 controls.plan_progress)
-            learner = learning.observe(hyper, learner, transitions, valid)
+            learner = learning.observe(learner, transitions, valid)
             learner = learner.replace(decisions=learner.decisions + decisions, key=k_learn)
 
             # 3. The learner's updates.
-            learner, loss, q_abs_max = learning.learn(hyper, learner, decisions, train_tasks.tasks)
+            learner, loss, q_abs_max = learning.learn(learner, decisions, train_tasks.tasks)
         else:  # random bridge, pure planning: nothing to learn, the same act-and-test loop
             learner = learner.replace(decisions=learner.decisions + decisions)
             eps = jnp.float32(1.0 if approach.bridge is BridgeKind.RANDOM else 0.0)

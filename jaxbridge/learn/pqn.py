@@ -62,7 +62,7 @@ class PQN:
     def greedy(self, state: PQNState) -> Any:
         return state.params
 
-    def observe(self, hyper: Hyper, state: PQNState, transitions: Transition, valid: jax.Array) -> PQNState:
+    def observe(self, state: PQNState, transitions: Transition, valid: jax.Array) -> PQNState:
         return state.replace(batch=transitions.replace(task=None), valid=valid)
 
     def stored(self, state: PQNState) -> jax.Array:
@@ -120,10 +120,9 @@ class PQN:
         some = weight.sum() > 0
         return jax.tree.map(lambda a, b: jnp.where(some, a, b), updated, state), (loss, q_abs_max, some)
 
-    def learn(self, hyper: Hyper, state: PQNState, decisions: jax.Array, tasks: Any
-              ) -> tuple[PQNState, jax.Array, jax.Array]:
+    def learn(self, state: PQNState, decisions: jax.Array, tasks: Any) -> tuple[PQNState, jax.Array, jax.Array]:
         """Q(lambda) targets for the cycle's decisions, then `pqn_epochs` shuffled passes over them."""
-        config = self.config
+        config, hyper = self.config, Hyper(**self.config.leaf_values())  # traced in a cycle: the slot's
         key, k_targets, k_epochs = jax.random.split(state.key, 3)
         if config.learner.reset_optimizer:
             state = state.replace(opt_state=self.optimizer.init(state.params))

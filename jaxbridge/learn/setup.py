@@ -21,7 +21,8 @@ from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, 
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.exploration import with_exploration
 from jaxbridge.learn.learner import QLearner
-from jaxbridge.learn.learners import factory_config, learner_factory
+from jaxbridge.learn.hyper import Hyper
+from jaxbridge.learn.learners import learner_factory
 from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.utils.progress import SlowWork
 
@@ -57,6 +58,11 @@ class Setup:
         config = self.config
         return self.approach.make_bridge(env, self.learner.net, config.n_sample, config.explore_ground_operators,
                                          config.param_samples is ParamSamples.STRATIFIED)
+
+    def learner_for(self, hyper: Hyper) -> QLearner:
+        """The learner of a slot whose leaf settings are `hyper` (traced in a cycle): made from the config with
+        those values, so that it reads its own slot's wherever it reads a leaf."""
+        return make_learner(self.config.with_leaves(hyper.values), self.approach, self.train_env)
 
     def init_learners(self) -> Any:
         """One learner state per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s).
@@ -95,10 +101,14 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
                                   ).with_quirks(config.env_quirks)
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
-    make_learner = learner_factory(config.learner.name)
-    learner = with_exploration(make_learner(factory_config(config), train_env, approach.observation_size(train_env),
-                                            approach.controls.observation.whole_state), config)
-    return Setup(config, env_cls, approach, train_env, test_env, learner)
+    return Setup(config, env_cls, approach, train_env, test_env, make_learner(config, approach, train_env))
+
+
+def make_learner(config: TrainConfig, approach: Approach, train_env: NoveltyEnv) -> QLearner:
+    """The learner `config` names, for the approach's observation on the training env, with its exploration."""
+    factory = learner_factory(config.learner.name)
+    learner = factory(config, train_env, approach.observation_size(train_env), approach.controls.observation.whole_state)
+    return with_exploration(learner, config)
 
 
 _TASKS_LOCK = threading.Lock()
