@@ -104,6 +104,9 @@ def test_every_older_config_version_loads_as_it_was_trained():
         TrainConfig.from_dict({**v11, "bogus": 1})
 
 
+UNRECORDED_BY_V11 = ("test_decisions",)  # metrics added after version 11's runs
+
+
 def metrics(run_dir: Path) -> list[dict]:
     return list(csv.DictReader((run_dir / "metrics.csv").open()))
 
@@ -129,6 +132,9 @@ def test_a_version_11_run_directory_evaluates_and_resumes_exactly(tmp_path):
     for got, want in zip(resumed, uninterrupted):
         assert got.keys() == want.keys()
         for column in got:
+            if got["cycle"] == "1" and column in UNRECORDED_BY_V11:
+                assert got[column] == "nan", column  # the old checkpoint's cycle: unknown, not made up
+                continue
             assert float(got[column]) == pytest.approx(float(want[column]), rel=1e-5, abs=1e-7), column
     assert json.loads((run / "config.json").read_text())["config_version"] == 11  # the run's file is kept as it was
 

@@ -37,6 +37,7 @@ class CycleMetrics:
     train_env_steps: jax.Array
     train_decisions: jax.Array  # bridge decisions in this cycle's training episodes
     test_env_steps: jax.Array
+    test_decisions: jax.Array  # bridge decisions per test task (a repaired model needs fewer)
     epsilon: jax.Array  # during this cycle's training episodes
     loss: jax.Array  # mean TD loss of this cycle's updates
     q_abs_max: jax.Array  # largest |Q| predicted in this cycle's updates (a non-finite value stops a run)
@@ -115,6 +116,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
         metrics = CycleMetrics(
             test_solve_rate=tested.success.mean(), train_success_rate=result.success.mean(),
             train_env_steps=result.steps.sum(), train_decisions=decisions, test_env_steps=tested.steps.sum(),
+            test_decisions=tested.bridge_decisions.mean(),
             epsilon=eps, loss=loss, q_abs_max=q_abs_max, buffer_size=learning.stored(learner),
             table_misses=result.table_misses.sum() + tested.table_misses.sum())
         return learner, (metrics, records if approach.repairs_model else None)

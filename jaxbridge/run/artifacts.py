@@ -18,7 +18,7 @@ from jaxbridge.viz.figures import plot_curves
 from jaxbridge.utils.smoothing import smooth
 
 METRIC_FIELDS = ("test_solve_rate", "train_success_rate", "train_env_steps", "train_decisions", "test_env_steps",
-                 "epsilon", "loss", "q_abs_max", "buffer_size", "table_misses")
+                 "test_decisions", "epsilon", "loss", "q_abs_max", "buffer_size", "table_misses")
 METRICS_CSV_FIELDS = (*METRIC_FIELDS, "test_smooth_reward", "train_smooth_reward")  # metrics.csv's columns after seed, cycle
 REPORT_CYCLES = (10, 25, 50, 100)
 STATISTICS_NOTE = (f"over seeds: mean and interquartile mean (IQM), each with its 95% percentile-bootstrap interval "

@@ -21,11 +21,14 @@ from jaxbridge.utils.files import write_atomic
 
 
 def read_metrics(run_dir: Path, fields=("test_solve_rate", "train_success_rate")) -> dict[str, np.ndarray]:
-    """{field: float[seeds, cycles]} from a run's metrics.csv, and "seeds": the seeds of the rows."""
+    """{field: float[seeds, cycles]} of the `fields` a run's metrics.csv has (an older run's lacks later
+    ones), and "seeds": the seeds of the rows."""
     with open(run_dir / "metrics.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
+        reader = csv.DictReader(f)
+        rows, columns = list(reader), reader.fieldnames
     seeds = sorted({int(r["seed"]) for r in rows})
     cycles = max(int(r["cycle"]) for r in rows)
+    fields = [k for k in fields if k in columns]
     out = {k: np.full((len(seeds), cycles), np.nan) for k in fields}
     for r in rows:
         i, c = seeds.index(int(r["seed"])), int(r["cycle"]) - 1

@@ -71,7 +71,7 @@ def _history(per_seed: list[list[dict]]) -> list[CycleMetrics]:
                          train_success_rate=field(c, "train_success_rate", np.float32),
                          train_env_steps=field(c, "train_env_steps", np.int32),
                          train_decisions=field(c, "train_decisions", np.int32),
-                         test_env_steps=field(c, "test_env_steps", np.int32), epsilon=zero, loss=zero,
+                         test_env_steps=field(c, "test_env_steps", np.int32), test_decisions=zero, epsilon=zero, loss=zero,
                          q_abs_max=zero, buffer_size=zero.astype(np.int32),
                          table_misses=field(c, "table_misses", np.int32))
             for c in range(len(per_seed[0]))]

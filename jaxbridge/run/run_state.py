@@ -130,7 +130,9 @@ def checkpoint_record(config: TrainConfig, history: list[CycleMetrics], elapsed_
 def _history(record: dict) -> list[CycleMetrics]:
     """Metrics back from a checkpoint record, exactly (float32 values round-trip through JSON)."""
     dtype = lambda v: np.float32 if isinstance(v[0], float) else np.int32
-    return [CycleMetrics(**{k: np.asarray(v, dtype(v)) for k, v in m.items()}) for m in record["history"]]
+    unknown = {"test_decisions": np.nan}  # metrics a run of an older version did not record
+    return [CycleMetrics(**{k: np.full(len(m["test_solve_rate"]), v, np.float32) for k, v in unknown.items()}
+                         | {k: np.asarray(v, dtype(v)) for k, v in m.items()}) for m in record["history"]]
 
 
 def _concat(states: list):
