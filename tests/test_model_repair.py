@@ -18,7 +18,7 @@ from jaxbridge.learn.model.segments import TaskReader
 from jaxbridge.learn.online import make_train
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.evaluate import batch_rollout, run_bridge
-from jaxbridge.run.model_repair import ModelRepair
+from jaxbridge.run.model_repair import LEARNED_CSV, ModelRepair
 from jaxbridge.run.runner import Interrupted, train
 from planner import read_domain
 
@@ -83,7 +83,10 @@ def test_a_repair_run_relearns_writes_its_domains_and_resumes_exactly(tmp_path):
     with pytest.raises(Interrupted):
         train(make_setup(config), tmp_path / "halted", fault_injection=_interrupt_at_cycle_4)
     train(make_setup(config), tmp_path / "halted", resume=True)
-    assert (tmp_path / "halted" / "metrics.csv").read_text() == (tmp_path / "straight" / "metrics.csv").read_text()
+    for written in ("metrics.csv", LEARNED_CSV):
+        assert (tmp_path / "halted" / written).read_text() == (tmp_path / "straight" / written).read_text()
+    learned = [int(row.split(",")[2]) for row in (tmp_path / "straight" / LEARNED_CSV).read_text().splitlines()[1:]]
+    assert len(learned) == 4 and learned[-1] > 0  # seed 0's learned operators after each cycle
     domain = read_domain((tmp_path / "straight" / "models" / "seed0.pddl").read_text())
     assert any(op.name.startswith("MoveRobot_") for op in domain.operators)  # the move, repaired
     policy = jaxbridge.load(tmp_path / "straight")  # evaluated with the model it planned with at its last cycle

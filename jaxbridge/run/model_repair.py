@@ -10,7 +10,8 @@ long run relearns only log2(cycles) times.
 
 Beside each checkpoint a run keeps what it resumes from, `model_repair/<cycle>.pkl` (its slots' segments,
 models and host planners' answers, which are its tables' rows), and its seeds' latest learned domains as
-PDDL, `models/seed<N>.pddl`.
+PDDL, `models/seed<N>.pddl`, and how many operators each seed's model had learned after each cycle,
+`learned_operators.csv`.
 """
 from __future__ import annotations
 
@@ -32,6 +33,7 @@ from jaxbridge.run.checkpoint import CheckpointError
 from jaxbridge.utils.files import write_atomic
 from jaxbridge.utils.progress import SlowWork
 
+LEARNED_CSV = "learned_operators.csv"  # per seed and cycle, the learned operators of the seed's model after it
 KEPT_SEGMENTS = 5000  # per slot: about a few cycles of a paper env's training episodes
 
 
@@ -49,6 +51,7 @@ class ModelRepair:
         self.models: list[LearnedModel | None] = [None] * slots
         self.planners: dict = {}  # (slot, spec, env) -> its host planner (learn/model/device.model_batch)
         self.tabled = -1  # the planners' answers the cycle's tables hold (-1: none of theirs yet)
+        self.learned: list[list[int]] = []  # per cycle, each slot's learned operators after it
 
     def after_cycle(self, cycle_number: int, cycle: Cycle) -> None:
         """Keep the cycle's segments; on the schedule, relearn every slot's model; retask `cycle` where that
@@ -66,6 +69,7 @@ class ModelRepair:
                     self.models[slot] = self.kept_model(slot, learned)
                 progress(slot + 1, len(self.segments))
             self.tabled = -1
+        self.learned.append([len(model.learned_operators) if model else 0 for model in self.models])
         if self.tabled != sum(len(planner.cache) for planner in self.planners.values()):
             self.retask(cycle)
 
@@ -111,7 +115,8 @@ class ModelRepair:
             mine = slice(i * len(seeds), (i + 1) * len(seeds))
             caches = [(slot - mine.start, spec, env, planner.cache) for (slot, spec, env), planner in self.planners.items()
                       if mine.start <= slot < mine.stop]
-            state = {"segments": self.segments[mine], "models": self.models[mine], "caches": caches}
+            state = {"segments": self.segments[mine], "models": self.models[mine], "caches": caches,
+                     "learned": [counts[mine] for counts in self.learned]}
             for folder in ("model_repair", "models"):
                 (run_dir / folder).mkdir(exist_ok=True)
             write_atomic(run_dir / "model_repair" / f"{cycle_number}.pkl", pickle.dumps(state))
@@ -122,15 +127,19 @@ class ModelRepair:
             for seed, model in zip(seeds, self.models[mine]):
                 if model is not None:
                     write_atomic(run_dir / "models" / f"seed{seed}.pddl", model.pddl())
+            rows = [f"{seed},{c},{n}" for c, counts in enumerate(state["learned"], 1) for seed, n in zip(seeds, counts)]
+            write_atomic(run_dir / LEARNED_CSV, "\n".join(["seed,cycle,learned_operators", *rows]) + "\n")
 
     def restore(self, run_dirs: list[Path], cycle_number: int, cycle: Cycle) -> None:
         """The state saved beside cycle `cycle_number`'s checkpoints, and `cycle` retasked with its models."""
-        self.segments, self.models, caches = [], [], []
+        self.segments, self.models, caches, learned = [], [], [], []
         for run_dir in run_dirs:
             state = pickle.loads((run_dir / "model_repair" / f"{cycle_number}.pkl").read_bytes())
             caches += [(len(self.models) + slot, *rest) for slot, *rest in state["caches"]]
             self.segments += state["segments"]
             self.models += state["models"]
+            learned.append(state["learned"])
+        self.learned = [sum(counts, []) for counts in zip(*learned)]  # each cycle's counts, every run's slots
         for slot, spec, env, cache in caches:  # the planners' answers as they were: the tables' rows
             self.planners[slot, spec, env] = LearnedPlanner.of(env, spec, self.models[slot], cache)
         self.retask(cycle)
