@@ -4,7 +4,7 @@ Each cycle it fits the bridge's Q-network to the discounted returns of the decis
 cycles (no bootstrapping, no target network) by `epochs` full-batch Adam steps. Simple, and weaker than
 double DQN: a return is one episode's luck. Train it with
 
-    python train.py --env light_switch_door --approaches ours --learner examples.monte_carlo_q:make_learner \
+    python train.py --env light_switch_door --approaches ours --learner examples.monte_carlo_q:MonteCarloQ \
         --set memory=10 --sweep epochs=20,50
 """
 from __future__ import annotations
@@ -19,20 +19,10 @@ from flax import struct
 
 from envs_jax import NoveltyEnv
 from jaxbridge import TrainConfig
-from jaxbridge.core.learner_settings import QSettings, learner_settings
-from jaxbridge.core.settings import setting
+from jaxbridge.core.learner_settings import QSettings
+from jaxbridge.core.settings import made, setting
 from jaxbridge.learn.q_bridge import QNetwork, encode, input_size
 from jaxbridge.learn.transitions import Transition
-
-
-@dataclass(frozen=True)
-class MonteCarloSettings(QSettings):
-    """Its own two settings, beside the Q-network's and Adam's (QSettings: hidden_sizes, learning_rate, gamma, ...)."""
-
-    epochs: int = setting(50, low=1)
-    """Full-batch Adam steps per cycle."""
-    memory: int = setting(20, low=1)
-    """Cycles of decisions kept: the oldest cycle's are overwritten by the next."""
 
 
 @struct.dataclass
@@ -57,26 +47,37 @@ def discounted_returns(transitions: Transition, valid: jax.Array, gamma: jax.Arr
     return jax.lax.scan(backwards, jnp.float32(0.0), (transitions.reward, transitions.done, valid), reverse=True)[1]
 
 
-
-
 @dataclass(frozen=True)
-class MonteCarloQ:
-    env: NoveltyEnv
-    net: QNetwork
-    num_features: int
-    rows: int  # episodes_per_cycle x train_steps: the rows a cycle hands `observe`
-    settings: MonteCarloSettings
-    shares_network: bool = True
+class MonteCarloQ(QSettings):
+    """The learner, its fields its settings: its own two beside the Q-network's and Adam's (QSettings:
+    hidden_sizes, learning_rate, gamma, ...), then the parts `create` adds."""
+
+    epochs: int = setting(50, low=1)
+    """Full-batch Adam steps per cycle."""
+    memory: int = setting(20, low=1)
+    """Cycles of decisions kept: the oldest cycle's are overwritten by the next."""
+    env: NoveltyEnv = made()
+    net: QNetwork = made()
+    num_features: int = made()
+    rows: int = made()  # episodes_per_cycle x train_steps: the rows a cycle hands `observe`
+    shares_network = True
+
+    @classmethod
+    def create(cls, config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> MonteCarloQ:
+        """The run's learner: `config.learner` (these settings) with the parts made for the approach's observation
+        (`full_state` needs nothing different here)."""
+        return config.learner.with_parts(env=env, net=QNetwork(config.learner.hidden_sizes), num_features=num_features,
+                                         rows=config.episodes_per_cycle * config.train_steps)
 
     @property
     def adam(self) -> optax.GradientTransformation:
-        return optax.adam(self.settings.learning_rate)  # in a cycle, the slot's learning rate (a traced leaf)
+        return optax.adam(self.learning_rate)  # in a cycle, the slot's learning rate (a traced leaf)
 
     def init(self, key: jax.Array) -> MonteCarloState:
         k_init, k_run = jax.random.split(key)
         width = input_size(self.env, self.num_features)
         params = self.net.init(k_init, jnp.zeros((1, width), jnp.float32))
-        rows = self.settings.memory * self.rows
+        rows = self.memory * self.rows
         return MonteCarloState(params=params, opt_state=self.adam.init(params), key=k_run,
                                decisions=jnp.int32(0), cycles=jnp.int32(0), inputs=jnp.zeros((rows, width), jnp.float32),
                                returns=jnp.zeros(rows, jnp.float32), valid=jnp.zeros(rows, bool))
@@ -85,9 +86,9 @@ class MonteCarloQ:
         return state.params
 
     def observe(self, state: MonteCarloState, transitions: Transition, valid: jax.Array) -> MonteCarloState:
-        returns = jax.vmap(discounted_returns, in_axes=(0, 0, None))(transitions, valid, self.settings.gamma)
+        returns = jax.vmap(discounted_returns, in_axes=(0, 0, None))(transitions, valid, self.gamma)
         inputs = encode(self.env, transitions.features, transitions.skill, transitions.param)
-        at = (state.cycles % self.settings.memory) * self.rows
+        at = (state.cycles % self.memory) * self.rows
         put = lambda memory, new: jax.lax.dynamic_update_slice_in_dim(
             memory, new.reshape((self.rows,) + memory.shape[1:]), at, 0)
         return state.replace(inputs=put(state.inputs, inputs), returns=put(state.returns, returns),
@@ -108,16 +109,9 @@ class MonteCarloQ:
             return (params, opt_state), (loss, q_abs)
 
         (params, opt_state), (losses, q_abs) = jax.lax.scan(step, (state.params, state.opt_state), None,
-                                                           length=self.settings.epochs)
+                                                           length=self.epochs)
         return state.replace(params=params, opt_state=opt_state), losses.mean(), q_abs.max()
 
     def stored(self, state: MonteCarloState) -> jax.Array:
         return state.valid.sum(dtype=jnp.int32)
 
-
-@learner_settings(MonteCarloSettings)
-def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> MonteCarloQ:
-    """The factory `--learner examples.monte_carlo_q:make_learner` names; `config.learner` is its
-    MonteCarloSettings. For the approach's observation (`full_state` needs nothing different here)."""
-    return MonteCarloQ(env, QNetwork(config.learner.hidden_sizes), num_features,
-                       config.episodes_per_cycle * config.train_steps, config.learner)

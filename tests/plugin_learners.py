@@ -4,8 +4,7 @@ from dataclasses import dataclass
 
 import jax.numpy as jnp
 
-from examples.monte_carlo_q import MonteCarloQ, MonteCarloSettings, make_learner
-from jaxbridge.core.learner_settings import learner_settings
+from examples.monte_carlo_q import MonteCarloQ
 
 
 @dataclass(frozen=True)
@@ -24,13 +23,3 @@ class VectorLoss(MonteCarloQ):
     def learn(self, state, decisions, tasks):
         state, loss, q_abs = super().learn(state, decisions, tasks)
         return state, jnp.full(3, loss), q_abs
-
-
-@learner_settings(MonteCarloSettings)
-def growing_state(*args):
-    return GrowingState(*vars(make_learner(*args)).values())
-
-
-@learner_settings(MonteCarloSettings)
-def vector_loss(*args):
-    return VectorLoss(*vars(make_learner(*args)).values())

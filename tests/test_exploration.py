@@ -47,7 +47,7 @@ def test_the_bonus_is_paid_once_per_episode_per_observation_and_shrinks_with_the
 def test_off_the_learner_is_the_plain_one_and_on_it_is_wrapped_and_keeps_the_contract(learner):
     plain = jaxbridge.make_config(SEQUENCE, learner=learner, num_seeds=1)
     setup = make_setup(plain)
-    made = {"dqn": dqn.make_learner, "pqn": pqn.make_learner}[learner](plain, setup.train_env, 3, False)
+    made = {"dqn": dqn.DQN, "pqn": pqn.PQN}[learner].create(plain, setup.train_env, 3, False)
     assert plain.count_bonus == 0 and with_exploration(made, plain) is made  # the factory's own learner: today's program
     assert type(setup.learner) is type(made)
     on = make_setup(jaxbridge.make_config(SEQUENCE, learner=learner, num_seeds=1, count_bonus=0.1))

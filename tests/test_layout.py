@@ -95,9 +95,10 @@ def setting_names() -> set[str]:
     import dataclasses
 
     from jaxbridge.core.config import TrainConfig
-    from jaxbridge.core.learner_settings import BUILT_IN
+    from jaxbridge.core.learner_settings import registered, settings_class
     from jaxbridge.learn.approaches import Approach
-    names = {f.name for cls in (TrainConfig, Approach, *BUILT_IN.values()) for f in dataclasses.fields(cls)}
+    learners = [settings_class(name) for name in registered()]
+    names = {f.name for cls in (TrainConfig, Approach, *learners) for f in dataclasses.fields(cls)}
     return (names - {"name", "label", "description"}) | {"request"}  # request: --devices' value
 
 

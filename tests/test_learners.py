@@ -21,7 +21,7 @@ from jaxbridge.learn.transitions import Transition
 from jaxbridge.run.evaluate import evaluate_run
 
 
-EXAMPLE = "examples.monte_carlo_q:make_learner"
+EXAMPLE = "examples.monte_carlo_q:MonteCarloQ"
 
 
 def one_seed_tasks(setup):
@@ -39,8 +39,8 @@ def test_both_learners_keep_the_contract_on_features_and_on_the_full_state(env, 
 
 def test_a_broken_learner_is_refused_naming_the_method_and_what_it_expected(tmp_path):
     config = TrainConfig()
-    for spec, message in (("tests.plugin_learners:growing_state", "GrowingState.observe: expected a state of init's shapes"),
-                          ("tests.plugin_learners:vector_loss", "VectorLoss.learn: expected loss a float32 scalar")):
+    for spec, message in (("tests.plugin_learners:GrowingState", "GrowingState.observe: expected a state of init's shapes"),
+                          ("tests.plugin_learners:VectorLoss", "VectorLoss.learn: expected loss a float32 scalar")):
         learner = make_setup(replace(config, learner=spec)).learner
         with pytest.raises(LearnerContractError, match=message.replace("(", r"\(")):
             check_learner(learner, config)
@@ -49,7 +49,7 @@ def test_a_broken_learner_is_refused_naming_the_method_and_what_it_expected(tmp_
     with pytest.raises(ValueError, match="unknown learner 'nope'; choose from dqn, pqn"):
         make_setup(replace(config, learner="nope"))
     # train.py checks a learner of your own before anything is written
-    proc = cli_in_process("train.py", "--learner", "tests.plugin_learners:growing_state", "--approaches", "ours",
+    proc = cli_in_process("train.py", "--learner", "tests.plugin_learners:GrowingState", "--approaches", "ours",
                           "--num-seeds", "1", "--out", str(tmp_path))
     one_line_error(proc, 2, "--learner: GrowingState.observe: expected a state of init's shapes")
     assert not any(tmp_path.iterdir())

@@ -15,7 +15,7 @@ from run_helpers import train as train_cli
 import jaxbridge
 from jaxbridge.core import grid
 from jaxbridge.core.config import CONFIG_VERSION, TrainConfig
-from jaxbridge.core.learner_settings import BUILT_IN, DQNSettings, PQNSettings
+from jaxbridge.core.learner_settings import DQNSettings, PQNSettings
 from jaxbridge.learn.hyper import Hyper
 
 V11_RUN = Path(__file__).parent / "data" / "v11_run"
@@ -64,17 +64,17 @@ def test_help_lists_the_chosen_learners_settings():
     assert "settings of learner pqn" in pqn and "q_lambda = 0.65 [leaf]" in pqn and "batch_size = " not in pqn
     assert "batch_size = 256" in train_cli("--help").stdout  # double DQN's by default
     assert "settings of learner pqn" in jaxbridge.settings_help(preset="pqn")  # the preset's learner
-    mc = jaxbridge.settings_help("examples.monte_carlo_q:make_learner")
+    mc = jaxbridge.settings_help("examples.monte_carlo_q:MonteCarloQ")
     assert "epochs = 50\n    Full-batch Adam steps per cycle." in mc and "memory = 20" in mc
 
 
 def test_a_learner_registered_by_name_brings_its_settings():
-    from examples.monte_carlo_q import MonteCarloSettings, make_learner
-    from jaxbridge.learn.learners import register
+    from examples.monte_carlo_q import MonteCarloQ
+    from jaxbridge.core.learner_settings import register
 
-    register("mc_by_name", make_learner)  # what a built-in learner's registration line does
+    register("mc_by_name", "examples.monte_carlo_q:MonteCarloQ")  # what a built-in learner's entry does
     config = jaxbridge.make_config("light_switch_door", learner="mc_by_name", epochs=3)
-    assert type(config.learner) is MonteCarloSettings and (config.learner.epochs, config.learner.memory) == (3, 20)
+    assert type(config.learner) is MonteCarloQ and (config.learner.epochs, config.learner.memory) == (3, 20)
     assert TrainConfig.from_dict(json.loads(json.dumps(config.to_dict()))) == config
 
 
@@ -139,7 +139,7 @@ def test_a_version_11_run_directory_evaluates_and_resumes_exactly(tmp_path):
     assert json.loads((run / "config.json").read_text())["config_version"] == 11  # the run's file is kept as it was
 
 
-SETTINGS_CLASSES = (TrainConfig, *BUILT_IN.values())
+SETTINGS_CLASSES = (TrainConfig, DQNSettings, PQNSettings)
 NAMES = {f.name for cls in SETTINGS_CLASSES for f in dataclasses.fields(cls)} - {"name", "env", "learner"}
 
 

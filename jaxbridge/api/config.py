@@ -77,17 +77,8 @@ def _check_fits_env(config: TrainConfig, env_cls) -> None:
     check_test_protocol(env_cls, config.test_protocol)
     with refusing("episodes_per_cycle"):
         config.check_buffer_fits()
-    _check_learner(config, env_cls)
     if config.seed_block > config.num_seeds:
         raise InputError(f"{{setting}} {config.seed_block} is larger than the {config.num_seeds} seeds", "seed_block")
-
-
-def _check_learner(config: TrainConfig, env_cls) -> None:
-    """Refuse a learner that does not load (an unknown name, a module or factory that is not there); its
-    contract is checked on the training's own setups (api/training.prepare)."""
-    from jaxbridge.learn.learners import learner_factory
-    with refusing("learner"):
-        learner_factory(config.learner.name)
 
 
 def default_test_protocol(env_cls) -> str:

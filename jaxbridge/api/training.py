@@ -273,8 +273,8 @@ def _approach_list(approaches: str | Sequence[str]) -> list[str]:
 def _refusing_setups(config: TrainConfig):
     """Where setups are built: a network the config cannot build (e.g. the learned selector with the
     authors' input scaling) is refused naming the approaches; with a learner of your own, naming it."""
+    from jaxbridge.core.learner_settings import registered
     from jaxbridge.learn.learner import LearnerContractError
-    from jaxbridge.learn.learners import registered
 
     return refusing("approaches" if config.learner.name in registered() else "learner", (ValueError, LearnerContractError))
 
@@ -282,9 +282,9 @@ def _refusing_setups(config: TrainConfig):
 def _plan(config: TrainConfig, names: list[str], hyper_grid: dict[str, tuple], env_cls):
     """The experiment's programs with their setups (run/experiments.plan), built once; a learner of your own
     checked against the learner contract on them (learn/learner.check_learner: shapes only)."""
+    from jaxbridge.core.learner_settings import registered
     from jaxbridge.learn.approaches import BridgeKind
     from jaxbridge.learn.learner import check_learner
-    from jaxbridge.learn.learners import registered
     from jaxbridge.run.experiments import plan
 
     with _refusing_setups(config):

@@ -9,7 +9,7 @@ import typing
 from dataclasses import dataclass
 
 from jaxbridge.core.learner_settings import (DQNSettings, LearnerSettings, PQNSettings, named, settings_class)
-from jaxbridge.core.settings import Settings, described, setting
+from jaxbridge.core.settings import Settings, declared, described, setting
 
 # 2: `approach` (version 1 configs were all "ours" and still load); 3: `split_task_state` (older runs
 # stored whole observations and load with it off); 4: `preset`, `test_protocol`, `activation`,
@@ -199,13 +199,13 @@ _OWN = tuple(f.name for f in dataclasses.fields(TrainConfig))
 
 
 def _names(cls: type) -> tuple[str, ...]:
-    return tuple(f.name for f in dataclasses.fields(cls))
+    return tuple(f.name for f in declared(cls))
 
 
 def _plain(value):
     """A value as JSON keeps it: settings as a dict, tuples as lists, enum members as their text."""
     if isinstance(value, Settings):
-        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        return {f.name: _plain(getattr(value, f.name)) for f in declared(value)}
     return list(value) if isinstance(value, tuple) else value
 
 

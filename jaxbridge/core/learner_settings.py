@@ -2,8 +2,8 @@
 config as `config.learner`, and which class a learner name takes.
 
 Double DQN's (`DQNSettings`) and PQN's (`PQNSettings`) share the Q-network's and its optimiser's
-(`QSettings`). A learner of your own declares its class in its own file and marks its factory with
-`@learner_settings(ItsSettings)` (docs/NEW_LEARNER.md).
+(`QSettings`). A learner of your own is one class whose fields are its settings (docs/NEW_LEARNER.md); a name is
+registered here for each built-in learner and any `register`ed one.
 """
 from __future__ import annotations
 
@@ -176,54 +176,49 @@ class PQNSettings(QSettings):
     """Minibatches per pass over a cycle's decisions."""
 
 
-# The built-in learners' settings by name (their factories: learn/learners.py); a plug-in learner's
-# factory names its class (`learner_settings`).
-BUILT_IN = {"dqn": DQNSettings, "pqn": PQNSettings}
-_REGISTERED: dict[str, type[LearnerSettings]] = dict(BUILT_IN)
+# The learners by name: each a `package.module:Class` whose `create(config, env, num_features, full_state)`
+# makes the run's learner; imported when first named (the built-ins live a floor above, in learn/).
+_REGISTERED = {"dqn": "jaxbridge.learn.dqn:DQN", "pqn": "jaxbridge.learn.pqn:PQN"}
 
 
-def learner_settings(cls: type[LearnerSettings]):
-    """Mark a learner factory with its settings class: `@learner_settings(MySettings)` above
-    `def make_learner(config, env, num_features, full_state)`, which then reads `config.learner`."""
-    def mark(factory):
-        factory.settings = cls
-        return factory
-    return mark
+def register(name: str, spec: str) -> None:
+    """Give the learner class `package.module:Class` a short name for `--learner`."""
+    if not name or ":" in name:
+        raise ValueError(f"a learner name is a non-empty string without ':', got {name!r}")
+    _REGISTERED[name] = spec
 
 
-def register_settings(name: str, cls: type[LearnerSettings]) -> None:
-    _REGISTERED[name] = cls
+def registered() -> list[str]:
+    return list(_REGISTERED)
 
 
-def settings_class(spec: str) -> type[LearnerSettings]:
-    """The settings class of the learner `spec` names: a registered name's, or the one a
-    `package.module:factory` is marked with (double DQN's if unmarked: the settings every learner read
-    before learners had their own); ValueError in one line for an unknown name or missing module."""
-    if spec in _REGISTERED:
-        return _REGISTERED[spec]
-    if ":" not in spec:
-        raise ValueError(f"unknown learner {spec!r}; choose from {', '.join(_REGISTERED)}, or give package.module:factory")
-    return getattr(plugin_factory(spec), "settings", DQNSettings)
-
-
-def plugin_factory(spec: str):
-    """The learner factory `package.module:factory` names, imported; ValueError in one line for a module
-    that does not import or a factory that is not there."""
-    module_name, _, attribute = spec.partition(":")
+def learner_class(spec: str) -> type:
+    """The learner class `spec` names: a registered name's or `package.module:Class`; ValueError in one line
+    for an unknown name, a module that does not import or a class that is not there."""
+    if ":" not in spec and spec not in _REGISTERED:
+        raise ValueError(f"unknown learner {spec!r}; choose from {', '.join(_REGISTERED)}, or give package.module:Class")
+    module_name, _, attribute = _REGISTERED.get(spec, spec).partition(":")
     try:
         module = importlib.import_module(module_name)
     except ImportError as err:
         raise ValueError(f"learner {spec!r}: cannot import module {module_name!r} ({err})") from None
-    if not callable(getattr(module, attribute, None)):
-        raise ValueError(f"learner {spec!r}: module {module_name!r} has no callable {attribute!r}")
+    if not callable(getattr(getattr(module, attribute, None), "create", None)):
+        raise ValueError(f"learner {spec!r}: module {module_name!r} has no learner class {attribute!r} (with create)")
     return getattr(module, attribute)
+
+
+def settings_class(spec: str) -> type[LearnerSettings]:
+    """The settings class of the learner `spec` names: the class itself, whose fields are its settings, or
+    (a built-in's, declared here) its `settings`."""
+    cls = learner_class(spec)
+    return cls if issubclass(cls, LearnerSettings) else cls.settings
 
 
 def named(settings: LearnerSettings) -> LearnerSettings:
     """`settings` with its learner's name: as given, or the registered name of its class."""
     if settings.name:
         return settings
-    names = [name for name, cls in _REGISTERED.items() if cls is type(settings)]
+    names = [name for name in _REGISTERED if settings_class(name) is type(settings)]
     if not names:
-        raise ValueError(f"{type(settings).__name__}: give the learner's name (name='package.module:factory')")
+        raise ValueError(f"{type(settings).__name__}: give the learner's name (name='package.module:Class')")
     return dataclasses.replace(settings, name=names[0])

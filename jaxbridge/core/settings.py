@@ -30,8 +30,18 @@ def setting(default, *, leaf: bool = False, low=None, high=None, above: bool = F
     return dataclasses.field(default=default, metadata={"leaf": leaf, "range": checked, "choices": choices, "swept": swept})
 
 
+def made():
+    """A field that is no setting: a part a learner's `create` adds (its env, its network, ...)."""
+    return dataclasses.field(default=None, metadata={"made": True})
+
+
 def _meta(field: dataclasses.Field, key: str, absent=None):
     return field.metadata.get(key, absent)
+
+
+def declared(cls) -> tuple[dataclasses.Field, ...]:
+    """The settings fields of a settings class (or of settings): all but what `create` adds (`made`)."""
+    return tuple(f for f in dataclasses.fields(cls) if not _meta(f, "made", False))
 
 
 @dataclass(frozen=True)
@@ -61,24 +71,26 @@ class Settings:
         return {**values, **{name: getattr(self, name) for name in self.leaves()}}
 
     def with_leaves(self, values) -> "Settings":
-        """These settings with their leaf fields (and those of the settings they hold) from `values` (a
-        mapping or a Hyper, learn/hyper.py), unchecked: in a cycle each slot's are traced values, so a
-        learner made from them reads its own slot's wherever it reads a leaf."""
-        copy = object.__new__(type(self))  # not __init__: the range checks cannot read traced values
+        """These settings with their leaf fields (and those of the settings they hold) from the mapping
+        `values`, unchecked: in a cycle each slot's are traced values, so a learner made from them reads its
+        own slot's wherever it reads a leaf."""
+        held = {f.name: getattr(self, f.name).with_leaves(values) for f in dataclasses.fields(self)
+                if isinstance(getattr(self, f.name), Settings)}
+        return self.with_parts(**held, **{name: values[name] for name in self.leaves()})
+
+    def with_parts(self, **changes) -> "Settings":
+        """A copy with `changes`, unchecked (not __init__: the range checks cannot read traced values), e.g.
+        a learner's settings with the parts its `create` adds."""
+        copy = object.__new__(type(self))
         for field in dataclasses.fields(self):
-            value = getattr(self, field.name)
-            if isinstance(value, Settings):
-                value = value.with_leaves(values)
-            elif _meta(field, "leaf", False):
-                value = values[field.name]
-            object.__setattr__(copy, field.name, value)
+            object.__setattr__(copy, field.name, changes.get(field.name, getattr(self, field.name)))
         return copy
 
     def static_values(self) -> tuple:
         """Every non-leaf value, those of the settings it holds too: equal for two settings that one compiled
         program can train side by side."""
         return tuple(value.static_values() if isinstance(value, Settings) else value
-                     for field in dataclasses.fields(self) if not _meta(field, "leaf", False)
+                     for field in declared(self) if not _meta(field, "leaf", False)
                      for value in [getattr(self, field.name)])
 
 
@@ -90,7 +102,7 @@ def _check_range(name: str, value, low, high, low_included: bool) -> None:
 
 
 def fields_of(cls: type) -> dict[str, dataclasses.Field]:
-    return {f.name: f for f in dataclasses.fields(cls)}
+    return {f.name: f for f in declared(cls)}
 
 
 def is_swept(cls: type, name: str) -> bool:
@@ -128,4 +140,4 @@ def described(cls: type, skip: tuple[str, ...] = ()) -> str:
     marks a leaf (a sweep over it shares one compiled program)."""
     docs = field_docs(cls)
     return "\n".join(f"{f.name} = {shown(f.default)}{' [leaf]' if _meta(f, 'leaf', False) else ''}\n"
-                     + textwrap.indent(docs.get(f.name, ""), "    ") for f in dataclasses.fields(cls) if f.name not in skip)
+                     + textwrap.indent(docs.get(f.name, ""), "    ") for f in declared(cls) if f.name not in skip)

@@ -13,7 +13,7 @@ from flax import struct
 
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
-from jaxbridge.core.learner_settings import AttentionDistance, Normalise, PolyakPer, TargetInit
+from jaxbridge.core.learner_settings import AttentionDistance, DQNSettings, Normalise, PolyakPer, TargetInit
 from jaxbridge.core.observations import robot_features, token_measured_entries, token_position, token_width
 from jaxbridge.core.signatures import signature_members, signature_shape
 from jaxbridge.learn.approaches import get_approach
@@ -98,6 +98,15 @@ class DQN:
         return TaskPart(values=values, index=jnp.zeros((), jnp.int32), split=split)
 
     # The learner contract (learn/learner.QLearner), over the functions below.
+    settings = DQNSettings  # declared a floor below (core/learner_settings.py), where configs resolve them
+
+    @classmethod
+    def create(cls, config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> "DQN":
+        """With a full-state observation the buffer keeps only its entries that change within a task
+        (`split_task_state`)."""
+        split = task_state_split(env) if full_state and config.split_task_state else None
+        return make_dqn(config, env, num_features, split)
+
     @property
     def shares_network(self) -> bool:
         # The split approaches give a seed's network to the rollouts once (fast matrix products); the
@@ -160,13 +169,6 @@ def feature_noise_entries(config: TrainConfig, env: NoveltyEnv) -> np.ndarray | 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
     return DQN(env, config, q_network(config, env), clipped_adam(), num_features, split, choose_fit(config),
                feature_noise_entries(config, env))
-
-
-def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> DQN:
-    """The learner registry's factory (learn/learners.py): with a full-state observation the buffer keeps
-    only its entries that change within a task (`split_task_state`)."""
-    split = task_state_split(env) if full_state and config.split_task_state else None
-    return make_dqn(config, env, num_features, split)
 
 
 def stored_transitions(dqn: DQN, transitions: Transition) -> Transition:

@@ -20,7 +20,7 @@ from flax import struct
 
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
-from jaxbridge.core.learner_settings import Normalise, PQNSettings, learner_settings
+from jaxbridge.core.learner_settings import Normalise, PQNSettings
 from jaxbridge.learn.dqn import feature_noise_entries, perturbed, q_network
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
@@ -50,6 +50,15 @@ class PQN:
     num_features: int
     noise_entries: np.ndarray | None = None  # the observation entries feature noise perturbs (None: all)
     shares_network: bool = True  # one copy of the network for a rollout's episodes
+    settings = PQNSettings  # declared a floor below (core/learner_settings.py), where configs resolve them
+
+    @classmethod
+    def create(cls, config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> "PQN":
+        """Double DQN's network with LayerNorm; the same optimiser."""
+        if config.learner.normalise is not Normalise.NONE:
+            raise ValueError("learner pqn does not support normalise (set by the config or its preset)")
+        return cls(env, config, replace(q_network(config, env), layer_norm=True), clipped_adam(), num_features,
+                   feature_noise_entries(config, env))
 
     def init(self, key: jax.Array) -> PQNState:
         k_init, k_run = jax.random.split(key)
@@ -147,11 +156,3 @@ class PQN:
         loss = jnp.sum(losses * ran) / jnp.maximum(ran.sum(), 1.0)
         return state.replace(key=key), loss, jnp.max(q_abs * ran)
 
-
-@learner_settings(PQNSettings)
-def make_learner(config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> PQN:
-    """The learner registry's factory: double DQN's network with LayerNorm; the same optimiser."""
-    if config.learner.normalise is not Normalise.NONE:
-        raise ValueError("learner pqn does not support normalise (set by the config or its preset)")
-    return PQN(env, config, replace(q_network(config, env), layer_norm=True), clipped_adam(), num_features,
-               feature_noise_entries(config, env))

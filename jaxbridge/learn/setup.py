@@ -16,13 +16,13 @@ import numpy as np
 from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.config import ParamSamples, TrainConfig
+from jaxbridge.core.learner_settings import learner_class
 from jaxbridge.core.episode import Controls
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch, training_specs
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.exploration import with_exploration
 from jaxbridge.learn.learner import QLearner
 from jaxbridge.learn.hyper import Hyper
-from jaxbridge.learn.learners import learner_factory
 from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.utils.progress import SlowWork
 
@@ -106,8 +106,8 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
 
 def make_learner(config: TrainConfig, approach: Approach, train_env: NoveltyEnv) -> QLearner:
     """The learner `config` names, for the approach's observation on the training env, with its exploration."""
-    factory = learner_factory(config.learner.name)
-    learner = factory(config, train_env, approach.observation_size(train_env), approach.controls.observation.whole_state)
+    learner = learner_class(config.learner.name).create(config, train_env, approach.observation_size(train_env),
+                                                        approach.controls.observation.whole_state)
     return with_exploration(learner, config)
 
 
