@@ -47,8 +47,7 @@ SETTINGS = {field.name for field in dataclasses.fields(jaxbridge.TrainConfig)} |
 def chosen_learner(argv) -> tuple[str | None, str | None]:
     """The --learner and --preset given, read before the whole parse: --help lists that learner's settings."""
     early = argparse.ArgumentParser(add_help=False)
-    early.add_argument("--learner")
-    early.add_argument("--preset")
+    add_field_flags(early, jaxbridge.TrainConfig, only=("learner", "preset"))
     known, _ = early.parse_known_args(argv)
     return known.learner, known.preset
 
@@ -103,21 +102,12 @@ def parse_args(argv):
 
 
 def add_setting_flags(p) -> None:
-    """A flag per setting, made from its declaration (jaxbridge.TrainConfig's fields and LEARNER_FLAGS).
-    --env, --preset and --learner are written here: each names what resolves the other settings' values
-    (a registered env or a class, a preset, a learner's settings class), which their help lists."""
+    """A flag per setting, made from its declaration (jaxbridge.TrainConfig's fields and LEARNER_FLAGS)."""
     d, run = DEFAULTS, p.add_argument_group("settings of the run", "  each sets the TrainConfig field of its name "
                                            "(help(jaxbridge.TrainConfig));\n  one not given takes the preset's value "
-                                           "for the env, else the default shown")
-    run.add_argument("--env", metavar="NAME", help=f"environment: {', '.join(jaxbridge.env_names())}, or package.module:"
-                     f"Class for an env of your own (checked first; docs/NEW_ENV.md) (default: {d.env})")
-    run.add_argument("--preset", choices=list(jaxbridge.PRESETS), default=None,
-                     help="the values a run starts from: " + "; ".join(f"{k}: {v}" for k, v in jaxbridge.PRESETS.items())
-                          + " (flags below override it; config.json records every resolved value) (default: jaxbridge)")
-    run.add_argument("--learner", metavar="NAME", help="what fits the Q-function: dqn (double DQN, the paper's), pqn (no "
-                     "replay or target network) or package.module:factory (checked first; docs/NEW_LEARNER.md); "
-                     f"--help --learner NAME lists its settings below (default: {d.learner.name})")
-    add_field_flags(run, jaxbridge.TrainConfig, skip=("env", "preset", "learner", "approach"))  # approach: --approaches
+                                           "for the env, else the default shown.\n  envs: " + ", ".join(jaxbridge.env_names())
+                                           + "\n  presets: " + "; ".join(f"{k}: {v}" for k, v in jaxbridge.PRESETS.items()))
+    add_field_flags(run, jaxbridge.TrainConfig, skip=("approach",))  # approach: --approaches
     add_field_flags(p.add_argument_group(f"settings of learner {d.learner.name} with flags (the others, and other "
                                          "learners': --set, listed below)"), type(d.learner), only=LEARNER_FLAGS)
 

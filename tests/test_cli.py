@@ -217,7 +217,7 @@ def test_an_existing_run_is_not_overwritten(short_run):
      "seed 2's training task needs at least 12 steps"),
     (["train.py", "--num-seeds", "3", "--seed-block", "4"], "--seed-block 4 is larger than the 3 seeds"),
     (["train.py", "--seed-block", "0"], "positive integer"),
-    (["train.py", "--preset", "theirs"], "invalid choice: 'theirs'"),
+    (["train.py", "--preset", "theirs"], "unknown preset 'theirs'; choose from jaxbridge, authors, pqn"),
     (["train.py", "--env", "doorknobs", "--env-quirks", "raw_offsets,bogus"], "has no quirk 'bogus' (its quirks: raw_offsets"),
     (["train.py", "--env", "doorknobs", "--test-protocol", "authors"], "--test-protocol 'authors': doorknobs has jaxbridge"),
     (["eval.py", "--env", "doorknobs", "--test-protocol", "authors"], "--test-protocol 'authors': doorknobs has jaxbridge"),

@@ -40,15 +40,17 @@ class ParamSamples(enum.StrEnum):
 @dataclass(frozen=True)
 class TrainConfig(Settings):
     env: str = setting("light_switch_door", swept=False)
-    """Environment name."""
+    """Environment: a registered name (train.py --help lists them) or package.module:Class for an env of your
+    own (checked first; docs/NEW_ENV.md)."""
     approach: str = setting("ours", swept=False)
     """Which approach (jaxbridge/learn/approaches.py): the paper's ours, no_feature_selection,
     no_callplanner, random, pure_planning, maple_q; the plan-repair baselines plan_progress and
     plan_progress_replan; the low-level (brax) baselines low_level_ppo and low_level_sac, each also
     with _callplanner or _full_state."""
     preset: str = setting("jaxbridge", swept=False)
-    """The named set of values the run started from (jaxbridge/core/presets.py): jaxbridge (ours) or
-    authors (the authors' code where ours differs); every resolved value is in this config."""
+    """The named set of values the run starts from (jaxbridge/core/presets.py): jaxbridge (ours), authors (the
+    authors' code where ours differs) or pqn (PQN with its tuned values); the other settings given override
+    its values, and every resolved value is in this config."""
     test_protocol: str = setting("jaxbridge", swept=False)
     """Which of the env's test-task distributions (`test_protocols` of the env) the run is evaluated on,
     e.g. Coffee's authors: 4 cups, horizon 100; Light Switch Door's authors: horizon 30."""
@@ -106,8 +108,8 @@ class TrainConfig(Settings):
     """What fits the bridge's Q-function, with its settings (core/learner_settings.py; its name is
     `learner.name`): "dqn", double DQN with a replay buffer and a target network (the paper's); "pqn", PQN
     (Gallici et al. 2024): no replay buffer and no target network, LayerNorm in the Q-network, Q(lambda)
-    targets over each cycle's own decisions; or package.module:factory for a learner of your own
-    (docs/NEW_LEARNER.md). Given as a name, it takes that learner's default settings; a learner's setting
+    targets over each cycle's own decisions; or package.module:Class for a learner of your own
+    (docs/NEW_LEARNER.md; train.py --help --learner NAME lists its settings). Given as a name, it takes that learner's default settings; a learner's setting
     given by name to the config (`TrainConfig(batch_size=64)`) sets it in these, and reads by name
     (`config.batch_size`) read it here."""
     checkpoint_every: int = setting(10, low=1, swept=False)

@@ -161,6 +161,8 @@ def _shown(value) -> str:
         return ",".join(map(str, value)) or "none"
     if isinstance(value, bool):
         return str(value).lower()
+    if dataclasses.is_dataclass(value):  # a learner's settings: its name
+        return value.name
     return str(value.value if isinstance(value, enum.Enum) else value)
 
 
