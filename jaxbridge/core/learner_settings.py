@@ -50,7 +50,7 @@ class AttentionDistance(enum.StrEnum):
 @dataclass(frozen=True)
 class LearnerSettings(Settings):
     name: str = setting("", swept=False)
-    """The learner these settings are for: a registered name (dqn, pqn) or package.module:factory."""
+    """The learner these settings are for: a registered name (dqn, pqn) or package.module:Class."""
 
 
 @dataclass(frozen=True)
