@@ -67,7 +67,7 @@ def test_run_labels_and_preset_values():
     assert jaxbridge.run_labels(["ours", "maple_q@gamma=0.9"]) == {"ours": "ours", "maple_q@gamma=0.9": "Maple Q (pure RL) gamma=0.9"}
     authors = jaxbridge.preset_values("authors", "light_switch_door")
     assert authors["preset"] == "authors" and authors["batch_size"] == 64
-    assert jaxbridge.make_config("light_switch_door", preset="authors").batch_size == authors["batch_size"]
+    assert jaxbridge.make_config("light_switch_door", preset="authors").learner.batch_size == authors["batch_size"]
     for bad in (lambda: jaxbridge.run_labels(["nope"]), lambda: jaxbridge.preset_values("nope", "coffee")):
         with pytest.raises(jaxbridge.InputError):
             bad()

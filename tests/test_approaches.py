@@ -227,8 +227,8 @@ def test_env_defaults_sit_between_the_paper_defaults_and_explicit_overrides():
     assert doorknobs.env == "doorknobs" and doorknobs.call_planner_bonus == 0.5
     assert jaxbridge.make_config("doorknobs", call_planner_bonus=0.0).call_planner_bonus == 0.0
     coffee = jaxbridge.make_config("coffee")
-    assert coffee.updates_per_cycle == 250 and coffee.call_planner_bonus == 0.0
-    assert jaxbridge.make_config("coffee", updates_per_cycle=1000).updates_per_cycle == 1000
+    assert coffee.learner.updates_per_cycle == 250 and coffee.call_planner_bonus == 0.0
+    assert jaxbridge.make_config("coffee", updates_per_cycle=1000).learner.updates_per_cycle == 1000
     with pytest.raises(ValueError, match="unknown env"):
         jaxbridge.make_config("nowhere")
 

@@ -29,7 +29,7 @@ def test_bench_overrides_are_read_as_train_py_sweep_reads_them_and_bad_ones_are_
     args = parser.parse_args(["feature_noise=0", "loop_guard=false", "hidden_sizes=64x16", "env_quirks=raw_offsets"])
     config, changes = swept_config(args)
     assert changes == {"feature_noise": 0.0, "loop_guard": False, "hidden_sizes": (64, 16), "env_quirks": ("raw_offsets",)}
-    assert (config.feature_noise, config.loop_guard, config.hidden_sizes) == (0.0, False, (64, 16))
+    assert (config.learner.feature_noise, config.loop_guard, config.learner.hidden_sizes) == (0.0, False, (64, 16))
     assert config.env_quirks == ("raw_offsets",)
     assert swept_config(parser.parse_args(["env_quirks=none"]))[0].env_quirks == ()
     for bad, message in (("feature_noise=abc", "feature_noise: expected a number, got 'abc'"),

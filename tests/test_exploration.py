@@ -48,7 +48,7 @@ def test_off_the_learner_is_the_plain_one_and_on_it_is_wrapped_and_keeps_the_con
     plain = jaxbridge.make_config(SEQUENCE, learner=learner, num_seeds=1)
     setup = make_setup(plain)
     made = {"dqn": dqn.DQN, "pqn": pqn.PQN}[learner].create(plain, setup.train_env, 3, False)
-    assert plain.count_bonus == 0 and with_exploration(made, plain) is made  # the factory's own learner: today's program
+    assert plain.learner.count_bonus == 0 and with_exploration(made, plain) is made  # the factory's own learner: today's program
     assert type(setup.learner) is type(made)
     on = make_setup(jaxbridge.make_config(SEQUENCE, learner=learner, num_seeds=1, count_bonus=0.1))
     assert isinstance(on.learner, CountExploration) and type(on.learner.inner) is type(made) and on.learner.scale == 0.1

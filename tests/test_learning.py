@@ -48,7 +48,7 @@ def test_epsilon_anneals_linearly_per_decision_to_its_floor():
 
 def test_double_dqn_target_on_a_hand_built_batch():
     cfg = TrainConfig()
-    net = QNetwork(cfg.hidden_sizes)
+    net = QNetwork(cfg.learner.hidden_sizes)
     x0 = jnp.zeros((1, input_size(ENV, ENV.num_features)))
     # Random output layers (the default starts them at 0) so that the two nets disagree.
     def random_net(key):
@@ -73,7 +73,7 @@ def test_double_dqn_target_on_a_hand_built_batch():
     for i in range(2):
         allowed = [k for k in candidates if ground[i, k] > 0]
         chosen = max(allowed, key=lambda k: q(online, batch.next_features[i], k, candidates[k]))
-        expected = 0.0 + cfg.gamma * q(target, batch.next_features[i], chosen, candidates[chosen])
+        expected = 0.0 + cfg.learner.gamma * q(target, batch.next_features[i], chosen, candidates[chosen])
         assert y[i] == pytest.approx(expected, abs=1e-5)
     assert y[2] == 1.0  # terminal: no bootstrapping
 
@@ -235,9 +235,9 @@ def test_minibatches_drawn_up_front_are_the_draws_of_one_split_per_update():
 
     def one_per_update(key, _):
         key, k_sample = jax.random.split(key)
-        return key, sample_indices(learner.buffer, k_sample, config.batch_size)
+        return key, sample_indices(learner.buffer, k_sample, config.learner.batch_size)
 
-    expected_key, expected = jax.lax.scan(one_per_update, learner.key, None, length=config.updates_per_cycle)
+    expected_key, expected = jax.lax.scan(one_per_update, learner.key, None, length=config.learner.updates_per_cycle)
     assert indices.shape == (30, 16) and np.array_equal(indices, expected)
     assert np.array_equal(jax.random.key_data(key), jax.random.key_data(expected_key))
     assert 0 <= int(indices.min()) and int(indices.max()) < 77 and len(np.unique(indices)) > 60

@@ -93,4 +93,4 @@ if __name__ == "__main__":  # the learner's optimiser; --optax: optax's, to see 
     jax.config.update("jax_num_cpu_devices", 2)
     print(len(jax.local_devices()), blocks_on_one_and_two_devices(
         optax.chain(optax.clip_by_global_norm(MAX_NORM), optax.adam(LR)) if "--optax" in sys.argv
-        else clipped_adam(TrainConfig().grad_clip, TrainConfig().learning_rate)))
+        else clipped_adam(TrainConfig().learner.grad_clip, TrainConfig().learner.learning_rate)))

@@ -32,7 +32,8 @@ def test_the_authors_preset_reaches_the_learner_and_its_bridge(env):
     learner_config = setup.learner.config  # what the updates, targets and polyak steps read
     expected = {**AUTHORS, "n_sample": AUTHORS_N_SAMPLE[env], "preset": "authors"}
     assert setup.learner.net.normalise and setup.init_learners().norm is not None  # min-max scaling
-    assert {k: getattr(learner_config, k) for k in expected} == expected
+    read = lambda k: getattr(learner_config.learner if hasattr(learner_config.learner, k) else learner_config, k)
+    assert {k: read(k) for k in expected} == expected
     assert setup.bridge(setup.test_env).n_sample == AUTHORS_N_SAMPLE[env] and not setup.bridge(setup.test_env).stratified
     assert set(setup.train_env.quirks) == set(config.env_quirks)  # every env-level quirk it has, switched on
     assert all(getattr(setup.train_env, q) and getattr(setup.test_env, q) for q in config.env_quirks)
@@ -99,7 +100,7 @@ def test_the_jaxbridge_preset_is_the_default_config(env):
 
 def test_flags_override_the_preset_and_bad_names_are_refused():
     config = make_config(env="doorknobs", preset="authors", batch_size=128, test_protocol="jaxbridge")
-    assert config.batch_size == 128 and config.n_target_sample == 1 and config.test_protocol == "jaxbridge"
+    assert config.learner.batch_size == 128 and config.learner.n_target_sample == 1 and config.test_protocol == "jaxbridge"
     with pytest.raises(InputError, match="has no|has jaxbridge"):
         make_config(env="doorknobs", test_protocol="authors")  # Doorknobs' authors' tasks are ours
     with pytest.raises(ValueError, match="unknown preset"):
@@ -116,7 +117,7 @@ def test_the_authors_preset_builds_their_network_exploration_and_target():
     config = make_config(env="light_switch_door", preset="authors", num_seeds=1)
     setup = make_setup(config)
     assert setup.learner.net.activation == "relu" and setup.bridge(setup.test_env).explore_ground_operators
-    assert (config.target_init, config.reset_optimizer) == ("apart", True)
+    assert (config.learner.target_init, config.learner.reset_optimizer) == ("apart", True)
 
 
 @pytest.mark.parametrize("activation, hidden", [("relu", lambda h: np.maximum(h, 0.0)),
@@ -145,8 +146,8 @@ def test_the_output_layer_starts_at_zero_or_uniform_as_pytorch(ensemble):
     values = np.concatenate([np.ravel(v) for v in output])
     assert np.all(np.abs(values) <= 1 / np.sqrt(8)) and np.abs(values).max() > 0.5 / np.sqrt(8)
     assert np.asarray(uniform.apply(params, x)).std() > 0
-    assert jaxbridge.make_config("coffee", preset="authors").output_init == "uniform" == make_config(
-        env="coffee", preset="authors").output_init and TrainConfig().output_init == "zero"
+    assert jaxbridge.make_config("coffee", preset="authors").learner.output_init == "uniform" == make_config(
+        env="coffee", preset="authors").learner.output_init and TrainConfig().learner.output_init == "zero"
 
 
 def test_the_target_starts_as_a_copy_or_apart():
@@ -193,7 +194,7 @@ def test_minmax_scaling_is_fitted_to_the_stored_inputs_and_targets_and_scales_th
     config = jaxbridge.make_config("light_switch_door", preset="authors", num_seeds=1)
     setup = make_setup(config)
     dqn, learner = setup.learner, jax.tree.map(lambda x: x[0], setup.init_learners())
-    empty = fit_scaling(dqn, learner.buffer, jnp.zeros(config.buffer_capacity), None)
+    empty = fit_scaling(dqn, learner.buffer, jnp.zeros(config.learner.buffer_capacity), None)
     assert not np.asarray(empty["x_shift"]).any() and (np.asarray(empty["x_scale"]) == 1).all()
     rng = np.random.default_rng(0)
     n, data = 40, learner.buffer.data
@@ -203,7 +204,7 @@ def test_minmax_scaling_is_fitted_to_the_stored_inputs_and_targets_and_scales_th
     data = data.replace(features=data.features.at[:n].set(features).at[n:].set(100.0),  # unstored rows ignored
                         skill=data.skill.at[:n].set(skill), param=data.param.at[:n].set(param))
     buffer = learner.buffer.replace(data=data, size=jnp.int32(n))
-    targets = jnp.full(config.buffer_capacity, 9.0).at[:n].set(rng.uniform(0, 1.5, n))
+    targets = jnp.full(config.learner.buffer_capacity, 9.0).at[:n].set(rng.uniform(0, 1.5, n))
     norm = fit_scaling(dqn, buffer, targets, None)
     x = np.asarray(encode(dqn.env, features, skill, param))
     np.testing.assert_allclose(norm["x_shift"], x.min(0))
@@ -212,7 +213,7 @@ def test_minmax_scaling_is_fitted_to_the_stored_inputs_and_targets_and_scales_th
     np.testing.assert_allclose(norm["y_shift"], targets[:n].min())
     np.testing.assert_allclose(norm["y_scale"], max(float(targets[:n].max() - targets[:n].min()), 1.0))
     scaled = {**learner.params, "norm": norm}
-    plain = QNetwork(config.hidden_sizes, 1, config.activation, config.output_init)
+    plain = QNetwork(config.learner.hidden_sizes, 1, config.learner.activation, config.learner.output_init)
     expected = plain.apply({"params": learner.params["params"]["net"]}, (x - norm["x_shift"]) / norm["x_scale"])
     np.testing.assert_allclose(dqn.net.apply(scaled, x), expected * norm["y_scale"] + norm["y_shift"], rtol=1e-5)
 
@@ -264,22 +265,22 @@ def test_the_authors_fit_stops_after_patience_updates_without_a_lower_loss_and_r
     cycle = Cycle(setup)
     learners, _ = cycle(cycle.seeds.place(setup.init_learners()))  # one cycle: a filled buffer
     learner = jax.tree.map(lambda x: x[0], cycle.seeds.unpad(learners))
-    assert learner.buffer.size > 0 and config.fit_patience < int(learner.updates) <= config.updates_per_cycle
+    assert learner.buffer.size > 0 and config.learner.fit_patience < int(learner.updates) <= config.learner.updates_per_cycle
     dqn, hyper = setup.learner, Hyper.of(setup.config)
     targets = relabel(dqn, hyper, learner, jax.random.key(3), None)
     fitted, _, _ = jax.jit(lambda l: fit_until_no_better(dqn, hyper, l, targets, None))(learner)
 
     step = jax.jit(lambda l, index: update_step(dqn, hyper, l, targets, index, None))
     current, best, best_loss, since_best, done = learner, learner.params, np.inf, 0, 0
-    while done < config.updates_per_cycle and since_best < config.fit_patience:
+    while done < config.learner.updates_per_cycle and since_best < config.learner.fit_patience:
         key, k_sample = jax.random.split(current.key)
-        updated, (loss, _) = step(current.replace(key=key), sample_indices(current.buffer, k_sample, config.batch_size))
+        updated, (loss, _) = step(current.replace(key=key), sample_indices(current.buffer, k_sample, config.learner.batch_size))
         if float(loss) < best_loss:
             best, best_loss, since_best = current.params, float(loss), 0
         else:
             since_best += 1
         current, done = updated, done + 1
-    assert int(fitted.updates - learner.updates) == done and config.fit_patience <= done < config.updates_per_cycle
+    assert int(fitted.updates - learner.updates) == done and config.learner.fit_patience <= done < config.learner.updates_per_cycle
     for restored, expected, last in zip(jax.tree.leaves(fitted.params), jax.tree.leaves(best),
                                         jax.tree.leaves(current.params)):
         np.testing.assert_allclose(restored, expected, rtol=1e-4, atol=1e-6)

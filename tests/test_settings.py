@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_a_learners_settings_are_set_and_read_by_name_and_saved_nested():
     config = TrainConfig(learner="pqn", q_lambda=0.3, learning_rate=1e-4, n_sample=10)
     assert type(config.learner) is PQNSettings and config.learner.name == "pqn"
-    assert (config.learner.q_lambda, config.q_lambda, config.n_sample) == (0.3, 0.3, 10)
+    assert (config.learner.q_lambda, config.n_sample) == (0.3, 10) and not hasattr(config, "q_lambda")  # read in one place
     saved = json.loads(json.dumps(config.to_dict()))
     assert saved["learner"]["name"] == "pqn" and saved["learner"]["q_lambda"] == 0.3 and "q_lambda" not in saved
     assert saved["config_version"] == CONFIG_VERSION and TrainConfig.from_dict(saved) == config
@@ -38,7 +38,7 @@ def test_a_learners_settings_are_set_and_read_by_name_and_saved_nested():
 
 def test_a_preset_leaves_out_what_the_learner_lacks_and_the_hyper_leaves_are_the_leaf_settings():
     coffee = jaxbridge.make_config("coffee")  # its env defaults: updates_per_cycle 250 (double DQN's), step_gamma
-    assert coffee.updates_per_cycle == 250
+    assert coffee.learner.updates_per_cycle == 250
     pqn = jaxbridge.make_config("coffee", learner="pqn")
     assert type(pqn.learner) is PQNSettings and pqn.step_gamma == coffee.step_gamma
     assert list(vars(Hyper.of(pqn))["values"]) == ["learning_rate", "gamma", "grad_clip", "q_lambda",
@@ -89,7 +89,7 @@ def test_every_older_config_version_loads_as_it_was_trained():
     v11 = json.loads((V11_RUN / "config.json").read_text())
     assert v11["config_version"] == 11
     loaded = TrainConfig.from_dict(v11)
-    assert type(loaded.learner) is DQNSettings and loaded.updates_per_cycle == 10 and loaded.buffer_capacity == 256
+    assert type(loaded.learner) is DQNSettings and loaded.learner.updates_per_cycle == 10 and loaded.learner.buffer_capacity == 256
     assert flat(loaded) == {**{k: v for k, v in v11.items() if k not in ("q_lambda", "pqn_epochs", "pqn_minibatches")},
                             "count_bonus": 0.0, "keep_cycles": [], "attention_fixed_penalty": False,
                             "attention_log_scale": False,  # added later: their defaults, what the run had
@@ -99,7 +99,7 @@ def test_every_older_config_version_loads_as_it_was_trained():
     assert TrainConfig.from_dict({**flat(pqn), "batch_size": 64, "polyak_tau": 0.01}) == pqn  # DQN's fields dropped
     v1 = {k: v for k, v in v11.items() if k not in ("approach", "split_task_state", "learner", "q_lambda", "loop_guard")}
     old = TrainConfig.from_dict({**v1, "config_version": 1})
-    assert (old.approach, old.split_task_state, old.loop_guard, old.learner.name) == ("ours", False, False, "dqn")
+    assert (old.approach, old.learner.split_task_state, old.loop_guard, old.learner.name) == ("ours", False, False, "dqn")
     with pytest.raises(ValueError, match="unknown config fields: bogus"):
         TrainConfig.from_dict({**v11, "bogus": 1})
 

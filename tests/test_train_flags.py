@@ -31,7 +31,8 @@ def from_flags(*argv: str) -> tuple[TrainConfig, object]:
 def test_a_command_line_makes_the_config_its_settings_make(argv, keywords):
     config, _ = from_flags(*argv.split())
     assert config == jaxbridge.make_config(**keywords)
-    assert all(getattr(config, name) == value for name, value in keywords.items())  # each flag reached its setting
+    assert all(getattr(config.learner if hasattr(config.learner, name) else config, name) == value
+               for name, value in keywords.items())  # each flag reached its setting
 
 
 def test_set_overrides_a_flag_and_sweep_keeps_its_grid():

@@ -37,7 +37,7 @@ def rows(env: str) -> dict[str, tuple[dict, dict]]:
     out = {}
     for name in fields:
         members = groups.get(name, (name,))
-        mine = {f: ours.get(f, getattr(base, f)) for f in members}
+        mine = {f: ours.get(f, getattr(base.learner if hasattr(base.learner, f) else base, f)) for f in members}
         authors = {f: theirs[f] for f in members}
         if mine != authors:
             out[name] = (mine, authors)

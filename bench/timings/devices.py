@@ -45,7 +45,7 @@ def main() -> None:
             layout["times"].append(time.perf_counter() - t0)
             layout["metrics"].append([np.asarray(x)[: config.num_seeds] for x in jax.tree.leaves(metrics)])
     print(f"jax {jax.__version__}, devices: {devices}")
-    print(f"{config.env}: {config.num_seeds} seeds, {config.updates_per_cycle} updates/cycle, batch {config.batch_size}, "
+    print(f"{config.env}: {config.num_seeds} seeds, {config.learner.updates_per_cycle} updates/cycle, batch {config.learner.batch_size}, "
           f"seed block {config.seed_block}")
     for n, layout in layouts.items():
         print(f"{n} device(s): first cycle (with compilation) {layout['times'][0]:.1f} s; steady state "

@@ -125,10 +125,10 @@ def figures(setup: Setup, learner, metrics: list, ms: dict, tested, fill: int) -
                       "test_env_steps": mean("test_env_steps"), "test_decisions": int(tested.bridge_decisions.sum()),
                       "test_solve_rate": mean("test_solve_rate"), "table_misses": mean("table_misses")},
         "ms": {k: round(v, 1) for k, v in ms.items()},
-        "updates_per_cycle": config.updates_per_cycle,
-        "learn_us_per_update": round(1e3 * ms["learn"] / max(config.updates_per_cycle, 1), 1),
+        "updates_per_cycle": config.learner.updates_per_cycle,
+        "learn_us_per_update": round(1e3 * ms["learn"] / max(config.learner.updates_per_cycle, 1), 1),
         "update_parts_us": {k: round(v, 1) for k, v in
-                            update_parts(config.env, config.approach, fill, config.updates_per_cycle).items()},
+                            update_parts(config.env, config.approach, fill, config.learner.updates_per_cycle).items()},
     }
 
 

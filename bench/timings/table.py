@@ -70,7 +70,7 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
     config = jaxbridge.make_config(env, num_seeds=8)
     run = measure_cycles(config, devices, cycles=cycles + 1)
     first, later = run["first"], run["later"]
-    out["cycle"] = {"num_seeds": 8, "updates_per_cycle": config.updates_per_cycle, "batch_size": config.batch_size,
+    out["cycle"] = {"num_seeds": 8, "updates_per_cycle": config.learner.updates_per_cycle, "batch_size": config.learner.batch_size,
                     "build_s": round(run["build_s"], 2), "first_cycle_s": round(run["times"][0], 2),
                     "compile_s": round(first.trace_s + first.lower_s + first.compile_s, 2),
                     "compile_events": first.as_dict(), "measured_cycles": cycles,
@@ -80,7 +80,7 @@ def measure_env(env: str, devices_arg, cycles: int, repeats: int, update_repeats
                     "mean_test_solve_rate": run["rates"]}
     out["rss_after_cycles_mib"] = round(rss_mib(), 1)
 
-    r = measure_updates(run["setup"], run["seeds"], run["learners"], config.updates_per_cycle, update_repeats)
+    r = measure_updates(run["setup"], run["seeds"], run["learners"], config.learner.updates_per_cycle, update_repeats)
     out["updates"] = {k: round(v, 4) if isinstance(v, float) else v for k, v in r.items()}
     out["rss_peak_mib"] = round(rss_mib(), 1)
     out["rss_growth_mib"] = round(rss_mib() - base, 1)

@@ -120,8 +120,8 @@ def report(config: TrainConfig, run: dict) -> tuple[float, float]:
     steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
     mean = float(np.mean(times[1:])) if len(times) > 1 else times[0]
     per_seed_run = total / config.num_seeds
-    print(f"{config.env}, {config.approach}: {config.num_seeds} seeds x {config.cycles} cycles, {config.updates_per_cycle} updates/cycle, "
-          f"batch {config.batch_size}")
+    print(f"{config.env}, {config.approach}: {config.num_seeds} seeds x {config.cycles} cycles, {config.learner.updates_per_cycle} updates/cycle, "
+          f"batch {config.learner.batch_size}")
     print(f"tasks + plan tables: {run['build_s']:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "
           f"steady state: {steady:.3f} s/cycle, mean {mean:.3f} s/cycle")
     print(f"total: {total:.1f} s; final mean test solve rate {run['rates'][-1]:.2f}")

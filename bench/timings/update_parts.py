@@ -80,8 +80,8 @@ def measure(env_name: str, approach: str, fill: int, updates: int, split: bool =
 
     def adam(state):
         params, opt_state = state
-        step, opt_state = optimizer.update(params, opt_state, params, max_norm=config.grad_clip,
-                                           learning_rate=config.learning_rate)
+        step, opt_state = optimizer.update(params, opt_state, params, max_norm=config.learner.grad_clip,
+                                           learning_rate=config.learner.learning_rate)
         return optax.apply_updates(params, step), opt_state
 
     per_update = lambda s: 1e6 * s / updates

@@ -39,7 +39,7 @@ def measure_updates(setup, seeds, learners, updates: int, repeats: int = 3) -> d
 
     run = jax.jit(seeds.map_seeds(per_seed), out_shardings=seeds.sharding)
     real = seeds.real()
-    targets = jax.device_put(jnp.zeros((seeds.padded, config.buffer_capacity), jnp.float32), seeds.sharding)
+    targets = jax.device_put(jnp.zeros((seeds.padded, config.learner.buffer_capacity), jnp.float32), seeds.sharding)
     with compile_cache.record() as events:
         jax.block_until_ready(run(real, learners, targets))
     compile_s = events.trace_s + events.lower_s + events.compile_s
@@ -65,10 +65,10 @@ def main() -> None:
 
     config = jaxbridge.make_config(args.env, seeds=args.seed_list)
     run = measure_cycles(config, devices, cycles=2)
-    r = measure_updates(run["setup"], run["seeds"], run["learners"], args.updates or config.updates_per_cycle,
+    r = measure_updates(run["setup"], run["seeds"], run["learners"], args.updates or config.learner.updates_per_cycle,
                         args.repeats)
     print(f"jax {jax.__version__}, seeds over {describe(devices)} device(s)")
-    print(f"{config.env}: {r['seeds']} seeds x {r['updates']} updates (batch {config.batch_size}): compile "
+    print(f"{config.env}: {r['seeds']} seeds x {r['updates']} updates (batch {config.learner.batch_size}): compile "
           f"{r['compile_s']:.1f} s, {r['median_s']:.3f} s per call -> {r['updates_per_s']:,.0f} updates/s")
 
 

@@ -109,9 +109,9 @@ class TrainConfig(Settings):
     `learner.name`): "dqn", double DQN with a replay buffer and a target network (the paper's); "pqn", PQN
     (Gallici et al. 2024): no replay buffer and no target network, LayerNorm in the Q-network, Q(lambda)
     targets over each cycle's own decisions; or package.module:Class for a learner of your own
-    (docs/NEW_LEARNER.md; train.py --help --learner NAME lists its settings). Given as a name, it takes that learner's default settings; a learner's setting
-    given by name to the config (`TrainConfig(batch_size=64)`) sets it in these, and reads by name
-    (`config.batch_size`) read it here."""
+    (docs/NEW_LEARNER.md; train.py --help --learner NAME lists its settings). Given as a name, it takes that
+    learner's default settings; a learner's setting given by name to the config (`TrainConfig(batch_size=64)`)
+    sets it in these, and is read here (`config.learner.batch_size`)."""
     checkpoint_every: int = setting(10, low=1, swept=False)
     """Save the learner state every this many cycles (and after the last one)."""
     keep_cycles: tuple[int, ...] = setting((), swept=False)
@@ -125,16 +125,6 @@ class TrainConfig(Settings):
         if any(not 1 <= c <= self.cycles for c in self.keep_cycles):
             raise ValueError(f"keep_cycles must lie in 1..{self.cycles} (the run's cycles), got "
                              f"{','.join(map(str, self.keep_cycles))}")
-
-    def __getattr__(self, name: str):
-        # Only for names TrainConfig lacks: a learner's setting read by its name, so code and runs written
-        # before learners had their own settings read `config.batch_size` as `config.learner.batch_size`.
-        if name.startswith("__") or name == "learner":
-            raise AttributeError(name)
-        try:
-            return getattr(self.learner, name)
-        except AttributeError:
-            raise AttributeError(f"TrainConfig has no setting {name!r}, nor has learner {self.learner.name}") from None
 
     def to_dict(self) -> dict:
         """config.json's content: the learner's settings under `learner`, its name first."""

@@ -104,7 +104,7 @@ class DQN:
     def create(cls, config: TrainConfig, env: NoveltyEnv, num_features: int, full_state: bool) -> "DQN":
         """With a full-state observation the buffer keeps only its entries that change within a task
         (`split_task_state`)."""
-        split = task_state_split(env) if full_state and config.split_task_state else None
+        split = task_state_split(env) if full_state and config.learner.split_task_state else None
         return make_dqn(config, env, num_features, split)
 
     @property
@@ -140,30 +140,30 @@ class DQN:
 def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork | SignatureQNetwork:
     """The approach's Q-network: over its observation vector, over object tokens (learned selection), or one
     per failure signature."""
-    approach = get_approach(config.approach)
+    approach, s = get_approach(config.approach), config.learner
     if approach.per_signature:
-        if config.normalise is not Normalise.NONE:
+        if s.normalise is not Normalise.NONE:
             raise ValueError(f"approach {config.approach} does not scale its inputs: no normalise")
-        return SignatureQNetwork(signature_shape(env), signature_members(env), env.num_skills + 2, config.hidden_sizes,
-                                 config.activation, config.output_init, ensemble=config.q_ensemble)
+        return SignatureQNetwork(signature_shape(env), signature_members(env), env.num_skills + 2, s.hidden_sizes,
+                                 s.activation, s.output_init, ensemble=s.q_ensemble)
     if not approach.controls.observation.tokens:
-        return QNetwork(config.hidden_sizes, config.q_ensemble, config.activation, config.output_init,
-                        normalise=config.normalise is Normalise.MINMAX)
-    if config.normalise is not Normalise.NONE:
+        return QNetwork(s.hidden_sizes, s.q_ensemble, s.activation, s.output_init,
+                        normalise=s.normalise is Normalise.MINMAX)
+    if s.normalise is not Normalise.NONE:
         raise ValueError(f"approach {config.approach} does not scale its object tokens: no normalise")
-    at_stall = config.attention_distance is AttentionDistance.STALL
-    left_out = None if config.attention_robot_features else robot_features(env)
+    at_stall = s.attention_distance is AttentionDistance.STALL
+    left_out = None if s.attention_robot_features else robot_features(env)
     return ObjectQNetwork(token_width(env), env.num_skills + 2, token_position(env, at_stall),
-                          config.attention_preference, left_out, config.attention_fixed_penalty,
-                          config.attention_log_scale, config.hidden_sizes, config.activation, config.output_init,
-                          ensemble=config.q_ensemble)
+                          s.attention_preference, left_out, s.attention_fixed_penalty,
+                          s.attention_log_scale, s.hidden_sizes, s.activation, s.output_init,
+                          ensemble=s.q_ensemble)
 
 
 def feature_noise_entries(config: TrainConfig, env: NoveltyEnv) -> np.ndarray | None:
     """The observation entries `feature_noise` perturbs: all (None), or of object tokens their measured
     entries alone unless `attention_kind_noise` (core.observations.token_measured_entries)."""
     tokens = get_approach(config.approach).controls.observation.tokens
-    return token_measured_entries(env) if tokens and not config.attention_kind_noise else None
+    return token_measured_entries(env) if tokens and not config.learner.attention_kind_noise else None
 
 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
@@ -197,10 +197,10 @@ def init_learner(dqn: DQN, key: jax.Array) -> DQNState:
     sample = jnp.zeros((1, input_size(env, num_features)), jnp.float32)
     variables = dqn.net.init(k_init, sample)
     params, norm = {"params": variables["params"]}, variables.get("norm")  # the scaling is not a parameter
-    target = (jax.tree.map(jnp.copy, params) if dqn.config.target_init is TargetInit.COPY
+    target = (jax.tree.map(jnp.copy, params) if dqn.config.learner.target_init is TargetInit.COPY
               else {"params": dqn.net.init(jax.random.fold_in(k_init, 1), sample)["params"]})
     return DQNState(params=params, target_params=target, opt_state=dqn.optimizer.init(params),
-                    buffer=init_buffer(empty_transition(dqn), dqn.config.buffer_capacity), key=k_run,
+                    buffer=init_buffer(empty_transition(dqn), dqn.config.learner.buffer_capacity), key=k_run,
                     decisions=jnp.int32(0), updates=jnp.int32(0), norm=norm)
 
 
@@ -211,14 +211,14 @@ def td_targets(dqn: DQN, hyper: Hyper, params: Any, target_params: Any, batch: T
     `task` holds the training tasks' constants and `batch.task` indexes them. `hyper`: the numeric
     hyperparameters (`Hyper.of(config)`, or a cycle's slot's)."""
     env, config, net = dqn.env, dqn.config, dqn.net
-    skills = candidate_skills(env, config.n_target_sample)
+    skills = candidate_skills(env, config.learner.n_target_sample)
     keys = jax.random.split(key, batch.reward.shape[0])
     stratified = config.param_samples is ParamSamples.STRATIFIED
     best, _ = jax.vmap(lambda obs, k, i: best_candidate(env, net, params, obs, skills, k, at_task(task, i), stratified))(
         BridgeObs(batch.next_features, batch.next_num_ground), keys, batch.task)
     next_q = net.apply(target_params, batch_input(env, batch.next_features, best.skill, best.param,
                                                   at_task(task, batch.task)))
-    if config.clip_bootstrap:
+    if config.learner.clip_bootstrap:
         next_q = jnp.clip(next_q, 0.0, 1.0 + hyper.call_planner_bonus)
     if batch.steps is not None:  # semi-MDP: what follows the transition comes step_gamma^steps later
         late = config.step_gamma ** batch.steps.astype(jnp.float32)
@@ -313,9 +313,9 @@ def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, i
     env, config, net = dqn.env, dqn.config, dqn.net
     batch = jax.tree.map(lambda d: d[index], learner.buffer.data)
     features = batch.features
-    if config.feature_noise > 0:
-        features = (perturbed(features, config.feature_noise, learner.key, learner.updates, dqn.noise_entries)
-                    if noise is None else with_noise(features, config.feature_noise * noise, dqn.noise_entries))
+    if config.learner.feature_noise > 0:
+        features = (perturbed(features, config.learner.feature_noise, learner.key, learner.updates, dqn.noise_entries)
+                    if noise is None else with_noise(features, config.learner.feature_noise * noise, dqn.noise_entries))
 
     def loss_fn(params):
         variables = learner.replace(params=params).online
@@ -331,8 +331,8 @@ def update_step(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array, i
                                              learning_rate=hyper.learning_rate)
     params = optax.apply_updates(learner.params, updates)
     target = learner.target_params
-    if config.polyak_per is PolyakPer.UPDATE:
-        target = optax.incremental_update(params, target, config.polyak_tau)
+    if config.learner.polyak_per is PolyakPer.UPDATE:
+        target = optax.incremental_update(params, target, config.learner.polyak_tau)
     learner = learner.replace(params=params, target_params=target, opt_state=opt_state,
                               updates=learner.updates + 1)
     return learner, (loss, q_abs_max)
@@ -344,7 +344,7 @@ def fit_until_no_better(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.
     found no lower minibatch loss, or `updates_per_cycle` were made, then the weights that scored the
     lowest loss are restored (those a minibatch was evaluated with, before its step). Each seed stops on
     its own (a while loop); none runs while the buffer is empty. Returns as `learn`."""
-    config = dqn.config
+    config = dqn.config.learner
 
     def more(carry):
         learner, _, _, since_best, done, _, _ = carry
@@ -376,16 +376,16 @@ def minibatch_indices(config: TrainConfig, learner: DQNState) -> tuple[jax.Array
         key, k_sample = jax.random.split(key)
         return key, k_sample
 
-    key, sample_keys = jax.lax.scan(next_key, learner.key, None, length=config.updates_per_cycle)
-    return key, jax.vmap(lambda k: sample_indices(learner.buffer, k, config.batch_size))(sample_keys)
+    key, sample_keys = jax.lax.scan(next_key, learner.key, None, length=config.learner.updates_per_cycle)
+    return key, jax.vmap(lambda k: sample_indices(learner.buffer, k, config.learner.batch_size))(sample_keys)
 
 
 def track_target(config: TrainConfig, learner: DQNState, decisions: jax.Array) -> DQNState:
     """The authors' polyak schedule: one soft update of the target towards the online net per training
     bridge decision, i.e. (1 - tau)^decisions of the old target is kept."""
-    if config.polyak_per is not PolyakPer.DECISION:
+    if config.learner.polyak_per is not PolyakPer.DECISION:
         return learner
-    keep = (1.0 - config.polyak_tau) ** decisions.astype(jnp.float32)
+    keep = (1.0 - config.learner.polyak_tau) ** decisions.astype(jnp.float32)
     target = jax.tree.map(lambda t, p: keep * t + (1.0 - keep) * p, learner.target_params, learner.params)
     return learner.replace(target_params=target)
 
@@ -407,7 +407,7 @@ def learn(dqn: DQN, hyper: Hyper, learner: DQNState, decisions: jax.Array,
     learner = learner.replace(key=key)
     if learner.norm is not None:
         learner = learner.replace(norm=fit_scaling(dqn, learner.buffer, targets, task))
-    if config.reset_optimizer:  # the authors' new Adam for every cycle's fit
+    if config.learner.reset_optimizer:  # the authors' new Adam for every cycle's fit
         learner = learner.replace(opt_state=dqn.optimizer.init(learner.params))
     learner, loss, q_abs_max = dqn.fit(dqn, hyper, learner, targets, task)
     return (learner if rows is None else with_input_rows(whole, learner, rows)), loss, q_abs_max
@@ -430,9 +430,9 @@ def fixed_updates(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,
 
     config = dqn.config
     key, indices = minibatch_indices(config, learner)
-    noise = (minibatch_noise(learner.key, learner.updates + jnp.arange(config.updates_per_cycle),
+    noise = (minibatch_noise(learner.key, learner.updates + jnp.arange(config.learner.updates_per_cycle),
                              noise_shape(indices.shape[1:] + (dqn.stored_features,), dqn.noise_entries))
-             if config.feature_noise > 0 else None)
+             if config.learner.feature_noise > 0 else None)
     fitted, (losses, q_abs) = jax.lax.scan(body, learner.replace(buffer=None), (indices, noise))
     learner = fitted.replace(buffer=buffer, key=jnp.where(ready, key, learner.key))
     return learner, jnp.mean(losses), jnp.max(q_abs)
@@ -447,6 +447,6 @@ def no_updates(dqn: DQN, hyper: Hyper, learner: DQNState, targets: jax.Array,
 def choose_fit(config: TrainConfig) -> Callable:
     """A cycle's fit to the relabelled targets, chosen once from the config: none, ours' fixed number of
     updates, or the authors' early-stopping fit (`fit_patience`)."""
-    if config.updates_per_cycle == 0:
+    if config.learner.updates_per_cycle == 0:
         return no_updates
-    return fit_until_no_better if config.fit_patience else fixed_updates
+    return fit_until_no_better if config.learner.fit_patience else fixed_updates

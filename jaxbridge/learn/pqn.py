@@ -113,7 +113,7 @@ class PQN:
         """One Adam step on the weighted squared error of a minibatch; none where it holds no decision."""
         env, net, noise = self.env, self.net, self.config.learner.feature_noise
         features = batch.features
-        if noise > 0:  # as double DQN's (TrainConfig.feature_noise): a fresh draw per update
+        if noise > 0:  # as double DQN's (QSettings.feature_noise): a fresh draw per update
             features = perturbed(features, noise, state.key, state.updates, self.noise_entries)
 
         def loss_fn(params):
