@@ -2,6 +2,7 @@
 docs/NEW_LEARNER.md is examples/monte_carlo_q.py)."""
 from dataclasses import dataclass
 
+import jax
 import jax.numpy as jnp
 
 from examples.monte_carlo_q import MonteCarloQ
@@ -23,3 +24,12 @@ class VectorLoss(MonteCarloQ):
     def learn(self, state, decisions, tasks):
         state, loss, q_abs = super().learn(state, decisions, tasks)
         return state, jnp.full(3, loss), q_abs
+
+
+@dataclass(frozen=True)
+class LeafInInit(MonteCarloQ):
+    """init scales the network by the learning rate: a leaf read in init (a sweep's settings start apart)."""
+
+    def init(self, key):
+        state = super().init(key)
+        return state.replace(params=jax.tree.map(lambda p: p * self.learning_rate, state.params))

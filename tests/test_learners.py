@@ -113,6 +113,15 @@ def test_the_example_learner_trains_from_the_command_line_sweeps_its_own_setting
     assert refused.returncode == 2 and "memory must be at least 1" in refused.stderr
 
 
+def test_each_setting_starts_from_its_own_learners_init():
+    # A sweep's settings share one program; a leaf its learner's init reads is still each setting's own.
+    config = TrainConfig(learner="tests.plugin_learners:LeafInInit", num_seeds=1)
+    setup = make_setup(config)
+    low, high = (setup.init_learners(replace(config, learning_rate=rate)).params for rate in (1e-3, 4e-3))
+    jax.tree.map(lambda a, b: np.testing.assert_allclose(4 * np.asarray(a), np.asarray(b), rtol=1e-6), low, high)
+    assert jax.tree.leaves(setup.init_learners().params)[0].sum() == jax.tree.leaves(low)[0].sum()  # its own config's
+
+
 def test_a_sweep_over_the_example_learners_learning_rate_trains_each_value():
     # One program for both settings (a leaf), each slot stepping at its own rate: the same first cycle's
     # decisions, barely fitted at 1e-6 and far at 3e-2 (a learning rate read as a constant trained both alike).

@@ -16,8 +16,8 @@ import numpy as np
 from envs_jax import NoveltyEnv, env_class
 from jaxbridge.core.bridges import Bridge
 from jaxbridge.core.config import ParamSamples, TrainConfig
-from jaxbridge.core.learner_settings import learner_class
 from jaxbridge.core.episode import Controls
+from jaxbridge.core.learner_settings import learner_class
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, make_batch, training_specs
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.exploration import with_exploration
@@ -64,13 +64,17 @@ class Setup:
         those values, so that it reads its own slot's wherever it reads a leaf."""
         return make_learner(self.config.with_leaves(hyper.values), self.approach, self.train_env)
 
-    def init_learners(self) -> Any:
+    def init_learners(self, setting: TrainConfig | None = None) -> Any:
         """One learner state per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s).
-        A low-level baseline's are brax's (normalizer, policy) parameters (learn/low_level.py)."""
+        `setting`: a config of this setup's program (default its own), whose learner makes them, so that an
+        `init` that reads a leaf reads that setting's. A low-level baseline's are brax's (normalizer, policy)
+        parameters (learn/low_level.py)."""
         if self.approach.low_level:
             from jaxbridge.learn.low_level import init_policies  # brax: imported only when used
             return init_policies(self)
-        return jax.jit(jax.vmap(self.learner.init))(seed_keys(self.config))  # one program, not op by op
+        own = setting in (None, self.config)
+        learner = self.learner if own else make_learner(setting, self.approach, self.train_env)
+        return jax.jit(jax.vmap(learner.init))(seed_keys(self.config))  # one program, not op by op
 
     def greedy_policy(self, env: NoveltyEnv, states: Any, owner: np.ndarray) -> tuple[Bridge, Any, Controls]:
         """The approach's greedy bridge on `env`, its per-episode parameters (episode i acts with seed owner[i]'s

@@ -64,11 +64,12 @@ class Done:
 
 
 def fresh_start(group: RunGroup) -> tuple[Done, float]:
-    """New runs: every run's learners from the seeds' keys, its config.json written; no time spent yet."""
-    fresh = group.setup.init_learners()
+    """New runs: every run's learners from the seeds' keys (made by its own setting's learner), its config.json
+    written; no time spent yet."""
+    fresh = [group.setup.init_learners(config) for config, _ in group.settings]
     for config, run_dir in group.written:
         write_atomic(run_dir / "config.json", json.dumps(config.to_dict(), indent=2) + "\n")
-    return Done(_concat([fresh] * len(group.settings)), [[] for _ in group.settings]), 0.0
+    return Done(_concat(fresh), [[] for _ in group.settings]), 0.0
 
 
 def restored(group: RunGroup) -> tuple[Done, float]:
