@@ -82,10 +82,11 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
     def seed_cycle(learner: Any, train_tasks: TaskArrays, test_tasks: TaskArrays,
                    hyper: Hyper) -> tuple[Any, CycleMetrics]:
         k_next, k_train, k_learn, k_test = jax.random.split(learner.key, 4)
-        learning = setup.learner_for(hyper)  # the slot's: its leaves are this slot's traced values
+        slot = config.with_leaves(hyper.values)  # the slot's settings, every leaf its traced value
+        learning = setup.learner_for(slot)
 
         # 1. Training episodes, epsilon-greedy, on the seed's training task.
-        eps = epsilon(hyper, learner.decisions)
+        eps = epsilon(slot, learner.decisions)
         explore = bridge_params(learning, learning.greedy(learner), eps, episodes)
         result, records = rollout(MetaPolicy(train_env, train_bridge, explore, controls, shared), train_tasks,
                                   jax.random.split(k_train, episodes), config.train_steps, record=approach.learns,
@@ -95,7 +96,7 @@ def make_seed_cycle(setup: Setup, host_planner: bool = True) -> Callable:
         if approach.learns:
             # 2. One transition per bridge decision, to the learner.
             transitions, valid = jax.vmap(episode_transitions, in_axes=(1, 0, None, None, None, None))(
-                records, result.success, call_planner, hyper.call_planner_bonus, config.counts_steps,
+                records, result.success, call_planner, slot.call_planner_bonus, config.counts_steps,
                 controls.plan_progress)
             learner = learning.observe(learner, transitions, valid)
             learner = learner.replace(decisions=learner.decisions + decisions, key=k_learn)

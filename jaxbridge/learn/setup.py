@@ -22,7 +22,6 @@ from jaxbridge.core.tasks import TaskBatch, evaluation_batch, evaluation_specs, 
 from jaxbridge.learn.approaches import Approach, get_approach
 from jaxbridge.learn.exploration import with_exploration
 from jaxbridge.learn.learner import QLearner
-from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.q_bridge import QBridgeParams
 from jaxbridge.utils.progress import SlowWork
 
@@ -59,10 +58,11 @@ class Setup:
         return self.approach.make_bridge(env, self.learner.net, config.n_sample, config.explore_ground_operators,
                                          config.param_samples is ParamSamples.STRATIFIED)
 
-    def learner_for(self, hyper: Hyper) -> QLearner:
-        """The learner of a slot whose leaf settings are `hyper` (traced in a cycle): made from the config with
-        those values, so that it reads its own slot's wherever it reads a leaf."""
-        return make_learner(self.config.with_leaves(hyper.values), self.approach, self.train_env)
+    def learner_for(self, slot: TrainConfig) -> QLearner:
+        """The learner of a slot of this setup's program, made from its settings `slot` (in a cycle, the
+        config with the slot's traced leaves: `with_leaves`), so that it reads its own slot's wherever it
+        reads a leaf."""
+        return make_learner(slot, self.approach, self.train_env)
 
     def init_learners(self, setting: TrainConfig | None = None) -> Any:
         """One learner state per seed, stacked on a leading seed axis; seed s starts from jax.random.key(s).
