@@ -25,11 +25,14 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 import jaxbridge
 from bench.command import CommandParser
 from bench.ledger import append, seed_set
 from bench.records import RECORDS, ROOT, check_clean, git_commit, machine, on_test_seeds, refuse, run_child, shown
 from jaxbridge.utils.files import write_atomic
+from jaxbridge.utils.stats import bootstrap_ci
 
 # The flags every study shares that do not change what it measures: left out of its command line.
 PLUMBING = ("help", "runs", "records", "allow_dirty", "change", "chosen_on")
@@ -178,6 +181,25 @@ def seed_flags(args: argparse.Namespace) -> list[str]:
 def sweep_step(run: Path) -> dict:
     """eval.py's novelty sweep of a run's final bridges."""
     return run_child(["python", "eval.py", shown(run), "--sweep", "novelties"])
+
+
+def oracle_rows(env: str, protocols: list[str], seeds: list[int]) -> tuple[list[dict], float]:
+    """The oracle bridge on every seed's test tasks under each protocol: one row per protocol and seed."""
+    start, rows = time.perf_counter(), []
+    for protocol in protocols:
+        episodes = jaxbridge.hand_made(env, "oracle", protocol).evaluate(seeds=seeds)
+        for seed, solve_rate in episodes.per_seed().items():
+            rows.append({"protocol": protocol, "seed": seed, "tasks": int((episodes.seeds == seed).sum()),
+                         "solve_rate": f"{solve_rate:.4f}"})
+    return rows, round(time.perf_counter() - start, 1)
+
+
+def summary_row(per_seed, **what) -> dict:
+    """Per-seed values (Episodes.per_seed()'s, say) as mean [95% CI] over seeds, after `what` names the cell."""
+    per_seed = np.asarray(list(per_seed.values()) if isinstance(per_seed, dict) else per_seed, np.float64)
+    low, high = bootstrap_ci(per_seed)
+    return {**what, "seeds": len(per_seed), "mean": f"{per_seed.mean():.3f}", "low": f"{float(low):.3f}",
+            "high": f"{float(high):.3f}"}
 
 
 def results_rows(experiment: Path, renamed: dict[str, str] | None = None) -> list[dict]:

@@ -22,7 +22,7 @@ ONE_BRIDGE = ("ours", "ours_learned_selection")  # one bridge for every kind
 
 
 def cell(row: dict) -> tuple[float, tuple[float, float]]:
-    """A summary row's mean and 95% CI (bench.studies.multi_novelty.summary_row)."""
+    """A summary row's mean and 95% CI (bench.study.summary_row)."""
     return float(row["mean"]), (float(row["low"]), float(row["high"]))
 
 
@@ -73,7 +73,7 @@ def answer(cells: dict[str, dict[str, tuple]], kinds: list[dict], spent: set[str
 
 
 def summary_table(rows: list[dict], column: str, heading: str = "{}") -> list[str]:
-    """Summary rows (bench.studies.multi_novelty.summary_row) as a table: an approach per row, a value of `column`
+    """Summary rows (bench.study.summary_row) as a table: an approach per row, a value of `column`
     per column (headed by `heading` formatted with it), mean [95% CI] over seeds in each cell."""
     values = list(dict.fromkeys(r[column] for r in rows))
     cells: dict[str, dict[str, str]] = {}

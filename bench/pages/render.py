@@ -18,14 +18,14 @@ import re
 import sys
 
 from bench.command import CommandParser
-from bench.pages import claims, fix_length, multi_novelty, performance, results, selection_history
+from bench.pages import claims, fix_length, model_repair, multi_novelty, performance, results, selection_history
 from bench.records import ROOT
 
 DOCS = ("README.md", "docs/RESULTS.md", "docs/PERFORMANCE.md", "docs/results/generalisation.md", "docs/results/plan_repair.md",
         "docs/results/learners.md", "docs/results/selection.md", "docs/results/fix_length.md",
-        "docs/results/multi_novelty.md", "docs/results/ledger.md")
+        "docs/results/multi_novelty.md", "docs/results/model_repair.md", "docs/results/ledger.md")
 BLOCKS = {**results.BLOCKS, **performance.BLOCKS, "claims": claims.claims_table, "claims rule": claims.rule_text,
-          "fix length": fix_length.block, "multi novelty": multi_novelty.block,
+          "fix length": fix_length.block, "multi novelty": multi_novelty.block, "model repair": model_repair.block,
           "selection history": selection_history.block}
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[\w ]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
 

@@ -16,7 +16,7 @@ from jaxbridge.utils import stats
 
 ENV_TITLES = {"light_switch_door": "Light Switch Door", "doorknobs": "Doorknobs", "coffee": "Coffee",
               "light_switch_panel": "Light Switch Panel", "coffee_distractor": "Coffee Distractor",
-              "doorknobs_distractor": "Doorknobs Distractor"}
+              "doorknobs_distractor": "Doorknobs Distractor", "multi_novelty": "Multi Novelty"}
 
 
 def commit_text(record: dict) -> str:

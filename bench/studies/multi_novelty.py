@@ -32,9 +32,9 @@ import numpy as np
 
 import jaxbridge
 from bench.records import CYCLES, run_child
-from bench.study import Steps, Study, csv_text, run_study, sweep_step, train_step, wall_s, without_stdout, write_run_records
+from bench.study import (Steps, Study, csv_text, run_study, summary_row, sweep_step, train_step, wall_s, without_stdout,
+                         write_run_records)
 from jaxbridge.utils.files import write_atomic
-from jaxbridge.utils.stats import bootstrap_ci
 
 ENV = "multi_novelty"
 KIND_TASKS = 8  # tasks per kind alone, the same for every seed
@@ -52,14 +52,6 @@ def kind_tasks() -> dict[str, list]:
     return tasks
 
 
-def summary_row(episodes: jaxbridge.Episodes, **what) -> dict:
-    """The fraction of tasks solved per seed as mean [95% CI] over seeds, after `what` names the cell."""
-    per_seed = np.array(list(episodes.per_seed().values()))
-    low, high = bootstrap_ci(per_seed)
-    return {**what, "seeds": len(per_seed), "mean": f"{per_seed.mean():.3f}", "low": f"{float(low):.3f}",
-            "high": f"{float(high):.3f}"}
-
-
 def greedy_rows(run: Path, approaches: list[str], kept: list[int]) -> dict:
     """Each approach's greedy bridges on its seeds' held-out combinations (at the `kept` cycles and the
     last), and its final bridges on each kind alone; with the seconds it took."""
@@ -67,8 +59,8 @@ def greedy_rows(run: Path, approaches: list[str], kept: list[int]) -> dict:
     for name in approaches:
         for cycle in [*kept, None]:
             policy = jaxbridge.load(run, name, cycle)
-            held_out.append(summary_row(policy.evaluate(test_protocol="held_out"), approach=name, cycle=policy.cycle))
-        kinds += [summary_row(policy.evaluate(tasks=specs), approach=name, kind=kind) for kind, specs in kind_tasks().items()]
+            held_out.append(summary_row(policy.evaluate(test_protocol="held_out").per_seed(), approach=name, cycle=policy.cycle))
+        kinds += [summary_row(policy.evaluate(tasks=specs).per_seed(), approach=name, kind=kind) for kind, specs in kind_tasks().items()]
     return {"held_out": held_out, "kinds": kinds, "wall_s": round(time.perf_counter() - start, 1)}
 
 

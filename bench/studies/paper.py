@@ -18,24 +18,13 @@ from __future__ import annotations
 
 import json
 import shutil
-import time
 from pathlib import Path
 
 import jaxbridge
 from bench.records import ENVS, PRESET_RUN
-from bench.study import Steps, Study, csv_text, results_rows, run_study, seed_flags, sweep_step, train_step, wall_s
+from bench.study import (Steps, Study, csv_text, oracle_rows, results_rows, run_study, seed_flags, sweep_step, train_step,
+                         wall_s)
 from jaxbridge.utils.files import write_atomic
-
-
-def oracle_rows(env: str, protocols: list[str], seeds: list[int]) -> tuple[list[dict], float]:
-    """The oracle bridge on every seed's test tasks under each protocol: one row per protocol and seed."""
-    start, rows = time.perf_counter(), []
-    for protocol in protocols:
-        episodes = jaxbridge.hand_made(env, "oracle", protocol).evaluate(seeds=seeds)
-        for seed, solve_rate in episodes.per_seed().items():
-            rows.append({"protocol": protocol, "seed": seed, "tasks": int((episodes.seeds == seed).sum()),
-                         "solve_rate": f"{solve_rate:.4f}"})
-    return rows, round(time.perf_counter() - start, 1)
 
 
 class Paper(Study):

@@ -129,6 +129,12 @@ class Policy(Bridges):
         return self.trained.config
 
     @property
+    def models(self) -> dict | None:
+        """A repair run's learned planner models by seed (`.pddl()` each), as its checkpoint's cycle had them;
+        None for a run that learns none."""
+        return self.trained.models
+
+    @property
     def cycle(self) -> int:
         """The checkpoint's cycle."""
         return self.trained.step

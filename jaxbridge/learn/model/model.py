@@ -2,7 +2,7 @@
 and its atoms of a state (planning.py plans with it)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from envs_jax.base import NoveltyEnv
 from jaxbridge.learn.model.operators import (Cluster, Examples, bind, cluster_effects, lift, model_bindings,
@@ -27,8 +27,9 @@ class LearnedModel:
         """The model's atoms that hold in `view`: the planner's own and the invented ones it uses."""
         return view.given | frozenset(a for a in self.grammar.atoms(view) if a[0] in self.domain.predicates)
 
-    def pddl(self) -> str:
-        return domain_pddl(self.domain)
+    def pddl(self, learned_only: bool = False) -> str:
+        """The model as a PDDL domain; `learned_only`: with the learned operators alone (what to read)."""
+        return domain_pddl(replace(self.domain, operators=self.learned_operators) if learned_only else self.domain)
 
     @property
     def learned_operators(self) -> tuple[LiftedOperator, ...]:
