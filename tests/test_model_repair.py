@@ -123,3 +123,17 @@ def test_a_relearned_model_that_solves_fewer_training_tasks_is_not_kept(model):
     assert repair.kept_model(0, unrepaired) is model
     repair.models[0] = unrepaired
     assert repair.kept_model(0, model) is model
+
+
+def test_a_slot_is_learned_again_on_the_schedule_only_after_its_bridge_acted(model):
+    """Relearning after cycles 1, 2, 4, 8, ...: a slot with no model yet, or with bridge calls since its
+    model was learned; not a slot whose plans needed no bridge, nor off the schedule."""
+    config = jaxbridge.make_config("multi_novelty", approach="ours_model_repair", num_seeds=2, episodes_per_cycle=2,
+                                   num_test_tasks=2)
+    repair = ModelRepair(make_setup(config), slots=2)
+    repair.segments = [jaxbridge.record_segments("multi_novelty", seed=0, episodes=2, rollouts=1), []]
+    assert repair.due(1) == [0] and repair.due(3) == []  # slot 1 has no calls to learn from
+    repair.models[0] = model
+    assert repair.due(4) == []
+    repair.bridged[0] = True
+    assert repair.due(4) == [0] and repair.due(6) == []

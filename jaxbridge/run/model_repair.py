@@ -3,8 +3,9 @@ learned from them, and its tasks planned with that model.
 
 After a cycle, every slot's training episodes are cut into segments (the planner's stalls and the
 bridge's fixes among them) and the most recent `KEPT_SEGMENTS` kept. After cycles 1, 2, 4, 8, ... each
-slot's model is learned again from them (kept only where its planner alone solves at least as many of the
-slot's training tasks as the model before it) and its training and test tasks are planned with it
+slot's model is learned again from them where the bridge acted in the slot's training since its model was
+last learned (kept only where its planner alone solves at least as many of the slot's training tasks as
+the model before it) and its training and test tasks are planned with it
 (learn/model/device.py): a doubling schedule, so early cycles get a model from their first fixes while a
 long run relearns only log2(cycles) times.
 
@@ -52,6 +53,7 @@ class ModelRepair:
         self.planners: dict = {}  # (slot, spec, env) -> its host planner (learn/model/device.model_batch)
         self.tabled = -1  # the planners' answers the cycle's tables hold (-1: none of theirs yet)
         self.learned: list[list[int]] = []  # per cycle, each slot's learned operators after it
+        self.bridged = [False] * slots  # the bridge acted in the slot's training since its model was learned
 
     def after_cycle(self, cycle_number: int, cycle: Cycle) -> None:
         """Keep the cycle's segments; on the schedule, relearn every slot's model; retask `cycle` where that
@@ -59,19 +61,29 @@ class ModelRepair:
         records = jax.tree.map(np.asarray, cycle.seeds.unpad(cycle.records))
         for slot, kept in enumerate(self.segments):
             specs, _ = self.seed_tasks(self.setup.train, slot)
-            kept += segments_from_records(self.setup.train.env, specs, jax.tree.map(lambda x: x[slot], records))
+            new = segments_from_records(self.setup.train.env, specs, jax.tree.map(lambda x: x[slot], records))
+            kept += new
             del kept[:-KEPT_SEGMENTS]
-        if relearns_after(cycle_number):
+            self.bridged[slot] |= any(segment.by_bridge for segment in new)
+        due = self.due(cycle_number)
+        if due:
             progress = SlowWork(f"{self.setup.config.env}: planner models learned after cycle {cycle_number}")
-            for slot, kept in enumerate(self.segments):
-                if kept:
-                    learned = learn_model(self.setup.env_cls, kept, given=self.setup.approach.given_predicates)
-                    self.models[slot] = self.kept_model(slot, learned)
-                progress(slot + 1, len(self.segments))
+            for done, slot in enumerate(due, 1):
+                learned = learn_model(self.setup.env_cls, self.segments[slot], given=self.setup.approach.given_predicates)
+                self.models[slot], self.bridged[slot] = self.kept_model(slot, learned), False
+                progress(done, len(due))
             self.tabled = -1
         self.learned.append([len(model.learned_operators) if model else 0 for model in self.models])
         if self.tabled != sum(len(planner.cache) for planner in self.planners.values()):
             self.retask(cycle)
+
+    def due(self, cycle_number: int) -> list[int]:
+        """The slots to learn again after `cycle_number`: on the schedule, those with calls to learn from and
+        no model yet, or bridge calls since their model was learned (plans that needed no bridge teach
+        nothing new)."""
+        if not relearns_after(cycle_number):
+            return []
+        return [slot for slot, kept in enumerate(self.segments) if kept and (self.models[slot] is None or self.bridged[slot])]
 
     def seed_tasks(self, batch: TaskBatch, slot: int) -> tuple[list, np.ndarray]:
         """The specs and horizons of `batch` (seed-major) that belong to the slot's seed."""
@@ -116,7 +128,7 @@ class ModelRepair:
             caches = [(slot - mine.start, spec, env, planner.cache) for (slot, spec, env), planner in self.planners.items()
                       if mine.start <= slot < mine.stop]
             state = {"segments": self.segments[mine], "models": self.models[mine], "caches": caches,
-                     "learned": [counts[mine] for counts in self.learned]}
+                     "learned": [counts[mine] for counts in self.learned], "bridged": self.bridged[mine]}
             for folder in ("model_repair", "models"):
                 (run_dir / folder).mkdir(exist_ok=True)
             write_atomic(run_dir / "model_repair" / f"{cycle_number}.pkl", pickle.dumps(state))
@@ -132,12 +144,13 @@ class ModelRepair:
 
     def restore(self, run_dirs: list[Path], cycle_number: int, cycle: Cycle) -> None:
         """The state saved beside cycle `cycle_number`'s checkpoints, and `cycle` retasked with its models."""
-        self.segments, self.models, caches, learned = [], [], [], []
+        self.segments, self.models, caches, learned, self.bridged = [], [], [], [], []
         for run_dir in run_dirs:
             state = pickle.loads((run_dir / "model_repair" / f"{cycle_number}.pkl").read_bytes())
             caches += [(len(self.models) + slot, *rest) for slot, *rest in state["caches"]]
             self.segments += state["segments"]
             self.models += state["models"]
+            self.bridged += state["bridged"]
             learned.append(state["learned"])
         self.learned = [sum(counts, []) for counts in zip(*learned)]  # each cycle's counts, every run's slots
         for slot, spec, env, cache in caches:  # the planners' answers as they were: the tables' rows
