@@ -125,19 +125,20 @@ class LearnedPlanner:
         return self.cache[state]
 
     def _plan(self, state: int) -> None:
-        # Only the state asked about is cached: an answer is a function of the state alone, whatever was
-        # asked before (a plan's later states asked directly may get another plan), so a resumed run plans
-        # as the run it continues.
+        # A plan found answers its later states too (those not answered already: an answer, once given,
+        # stays), so a plan of n steps costs one search, not n. The answers depend on the order of the
+        # questions; a run saves its planners' caches beside its checkpoints, so a resumed run answers alike.
         ops, relaxation = self._grounding(frozenset(a for a in self.task.atoms(state) if a[0] in self.derived))
         found = find_plan(relaxation.ops, self.goal, state, relaxation)
         if found is None:
             self.cache[state] = self.fallback.decide(state & self.task.env_mask)
         elif not found:
             self.cache[state] = PolicyEntry(NO_OPERATOR, state, 0)
-        else:
-            first = relaxation.ops[found[0]]
-            nxt = (state & ~first.delete) | first.add
-            self.cache[state] = PolicyEntry(self._code(ops[found[0]]), nxt & self.checked, len(found))
+        for step, index in enumerate(found or ()):
+            op = relaxation.ops[index]
+            nxt = (state & ~op.delete) | op.add
+            self.cache.setdefault(state, PolicyEntry(self._code(ops[index]), nxt & self.checked, len(found) - step))
+            state = nxt
 
     def _grounding(self, derived: frozenset[Atom]) -> tuple[list[GroundOperator], Relaxation]:
         """The model grounded with `derived` atoms (and the env's static ones) static, and the delete
