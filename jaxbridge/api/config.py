@@ -7,6 +7,8 @@ from typing import Sequence
 from jaxbridge.api.envs import EnvLike, check_test_protocol, env_name, load_env, seed_list
 from jaxbridge.core import grid, presets
 from jaxbridge.core.config import TrainConfig
+from jaxbridge.core.learner_settings import LearnerSettings, settings_class
+from jaxbridge.core.settings import declared, described
 from jaxbridge.utils.errors import InputError, refusing
 
 
@@ -36,12 +38,23 @@ def config_and_env(env: EnvLike | None = None, seeds: int | Sequence[int] | None
     env = TrainConfig.env if env is None else env
     env_cls = load_env(env)
     with refusing():  # an unknown setting or learner, a value out of its range (e.g. a negative bonus)
-        config = TrainConfig.over_preset(presets.preset_values(given.pop("preset", TrainConfig.preset), env_cls),
-                                         env=env_name(env), **given)
+        config = _over_preset(presets.preset_values(given.pop("preset", TrainConfig.preset), env_cls),
+                              env=env_name(env), **given)
     with refusing("set"):
         config = dataclasses.replace(config, **setting_values(settings or [], config))
     _check_fits_env(config, env_cls)
     return config, env_cls
+
+
+def _over_preset(values: dict, **given) -> TrainConfig:
+    """`given` over a preset's `values`. A preset's value for a setting the chosen learner lacks is left out
+    (an env's double-DQN defaults do not apply to PQN); a given one is refused (ValueError). A learner given
+    as settings is taken whole: the preset's values for it are left out."""
+    learner = given.get("learner", values.get("learner", TrainConfig.learner.name))
+    kept = {f.name for f in dataclasses.fields(TrainConfig)}
+    if not isinstance(learner, LearnerSettings):
+        kept |= {f.name for f in declared(settings_class(learner))}
+    return TrainConfig(**{**{k: v for k, v in values.items() if k in kept}, **given})
 
 
 def setting_values(texts: Sequence[str], config: TrainConfig) -> dict:
@@ -60,14 +73,10 @@ def settings_help(learner: str | None = None, preset: str | None = None) -> str:
     """What train.py --help lists below its flags (the run's settings are flags there): the settings of
     `learner` (default: the preset's learner, else double DQN), each with its default and its docstring
     ("[leaf]": a sweep over it shares one compiled program)."""
-    from jaxbridge.core import settings as declared
-    from jaxbridge.core.learner_settings import settings_class
-    from jaxbridge.core.presets import preset_learner
-
-    name = learner or preset_learner(preset) or TrainConfig.learner.name
+    name = learner or presets.preset_learner(preset) or TrainConfig.learner.name
     with refusing("learner"):
         cls = settings_class(name)
-    return f"settings of learner {name} (--set NAME=VALUE; --sweep NAME=V1,V2):\n" + declared.described(cls, skip=("name",))
+    return f"settings of learner {name} (--set NAME=VALUE; --sweep NAME=V1,V2):\n" + described(cls, skip=("name",))
 
 
 def _check_fits_env(config: TrainConfig, env_cls) -> None:

@@ -159,15 +159,6 @@ class TrainConfig(Settings):
             raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")
         return cls(**_typed(cls, data), learner=settings(**_typed(settings, learner)))
 
-    @classmethod
-    def over_preset(cls, values: dict, **given) -> "TrainConfig":
-        """`given` over a preset's `values`. A preset's value for a setting the chosen learner lacks is left
-        out (an env's double-DQN defaults do not apply to PQN); a given one is refused (ValueError). A
-        learner given as settings is taken whole: the preset's values for it are left out."""
-        learner = given.get("learner", values.get("learner", TrainConfig.learner.name))
-        kept = set(_OWN) if isinstance(learner, LearnerSettings) else set(_OWN) | set(_names(settings_class(learner)))
-        return cls(**{**{k: v for k, v in values.items() if k in kept}, **given})
-
     def check_buffer_fits(self) -> None:
         """ValueError unless a cycle's training episodes fit a learner's replay buffer in one insert: the
         buffer finds a transition's next_features in the slot after it (learn/transitions.successor_features),
