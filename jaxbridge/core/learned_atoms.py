@@ -20,16 +20,18 @@ NO_ATOM, UNARY, SAME_PLACE, BEFORE, ALL_AT, SPAN = range(6)
 
 @struct.dataclass
 class InventedAtoms:
-    """J invented ground atoms of one task (padding: kind NO_ATOM, never holds)."""
+    """J invented ground atoms of one task over P predicates (padding: kind NO_ATOM, never holds). Each
+    predicate is evaluated once over every object (pairs: a relation's [N, N]); an atom reads its cell."""
 
     kind: jax.Array  # int32[J]
+    predicate: jax.Array  # int32[J]: its predicate's index
     rows: jax.Array  # int32[J, 2]: the object-view rows of its arguments (a, b)
-    feature: jax.Array  # int32[J, 2]: its unary predicate as up to two literals, OR-ed
-    other: jax.Array  # int32[J, 2]: a band's other feature (the literal reads the distance to it), else -1
-    threshold: jax.Array  # float32[J, 2]
-    above: jax.Array  # bool[J, 2]: a literal holds where what it reads is above its threshold (else at or below)
-    used: jax.Array  # bool[J, 2]: the literal is part of the unary predicate
-    members: jax.Array  # int32[J]: the type id a quantified atom ranges over
+    feature: jax.Array  # int32[P, 2]: a predicate's unary part as up to two literals, OR-ed
+    other: jax.Array  # int32[P, 2]: a band's other feature (the literal reads the distance to it), else -1
+    threshold: jax.Array  # float32[P, 2]
+    above: jax.Array  # bool[P, 2]: a literal holds where what it reads is above its threshold (else at or below)
+    used: jax.Array  # bool[P, 2]: the literal is part of the unary predicate
+    members: jax.Array  # int32[P]: the type id a quantified predicate ranges over
 
 
 # A learned operator in a plan table is a code from here up: (lifted operator * rows + input row) * slots + slot.
@@ -60,23 +62,19 @@ def learned_code(lifted: int, input_row: int, slot: int, rows: int, slots: int) 
 def invented_holds(model: ModelTable, objects: Objects) -> jax.Array:
     """bool[J]: which invented atoms hold in the state seen as `objects`."""
     atoms, tol = model.invented, model.place_tolerance
-    values = objects.features[:, atoms.feature]  # [N, J, 2]
+    values = objects.features[:, atoms.feature]  # [N, P, 2]
     values = jnp.where(atoms.other >= 0, jnp.abs(values - objects.features[:, jnp.maximum(atoms.other, 0)]), values)
-    unary = jnp.any(((values > atoms.threshold) == atoms.above) & atoms.used, axis=-1).T  # [J, N]
-    a, b = atoms.rows[:, 0], atoms.rows[:, 1]
+    unary = jnp.any(((values > atoms.threshold) == atoms.above) & atoms.used, axis=-1).T  # [P, N]
     pos, x = objects.position, objects.position[:, 0]
-    fails = model.named[None, :] & (objects.type_id[None, :] == atoms.members[:, None]) & ~unary
-    at_a = jnp.max(jnp.abs(pos[a][:, None, :] - pos[None, :, :]), axis=-1) < tol  # [J, N]
-    from_a_to_b = (x[None, :] >= x[a][:, None] - tol) & (x[None, :] < x[b][:, None] - tol)
-    before = x[a] < x[b] - tol
-    by_kind = jnp.stack([
-        jnp.zeros_like(before),
-        jnp.take_along_axis(unary, a[:, None], axis=1)[:, 0],
-        jnp.max(jnp.abs(pos[a] - pos[b]), axis=-1) < tol,
-        before,
-        ~jnp.any(fails & at_a, axis=-1),
-        before & ~jnp.any(fails & from_a_to_b, axis=-1),
-    ])
+    same = jnp.max(jnp.abs(pos[:, None, :] - pos[None, :, :]), axis=-1) < tol  # [N, N]
+    before = x[:, None] < x[None, :] - tol  # [N, N]
+    fails = model.named[None, :] & (objects.type_id[None, :] == atoms.members[:, None]) & ~unary  # [P, N]
+    none_fail_at = ~jnp.any(fails[:, None, :] & same[None], axis=-1)  # [P, N]: no failing member at the place
+    # failing members left of each place: a span [a, b) holds none where b's count equals a's
+    failing_left = jnp.sum(fails[:, None, :] & (x[None, None, :] < x[None, :, None] - tol), axis=-1)  # [P, N]
+    p, a, b = atoms.predicate, atoms.rows[:, 0], atoms.rows[:, 1]
+    by_kind = jnp.stack([jnp.zeros_like(p, bool), unary[p, a], same[a, b], before[a, b], none_fail_at[p, a],
+                         before[a, b] & (failing_left[p, b] == failing_left[p, a])])
     return jnp.take_along_axis(by_kind, atoms.kind[None, :], axis=0)[0]
 
 

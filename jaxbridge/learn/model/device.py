@@ -97,7 +97,7 @@ class LearnedPlanner:
     cache: dict[int, PolicyEntry] = field(default_factory=dict)
     groundings: dict[frozenset[Atom], tuple[list[GroundOperator], Relaxation]] = field(default_factory=dict)
     uid: int = 0  # its plan tables' name for it (register_planner), once registered
-    model_tables: dict[tuple[int, int], ModelTable] = field(default_factory=dict)  # by capacities
+    model_tables: dict[tuple[int, int, int], ModelTable] = field(default_factory=dict)  # by capacities
 
     @classmethod
     def of(cls, env: NoveltyEnv, spec, model: LearnedModel, cache: dict | None = None) -> "LearnedPlanner":
@@ -160,32 +160,41 @@ class LearnedPlanner:
         return learned_code(lifted, names.index(source) if source in names else 0, slot, len(names), task.env.num_objects)
 
 
-def _invented_atoms(task: TaskModel, capacity: int) -> InventedAtoms:
-    """The device form of the task's invented atoms, padded to `capacity`."""
+def _invented_predicates(task: TaskModel) -> list[str]:
+    """The names of the predicates of the task's invented atoms, in order of first use."""
+    return list(dict.fromkeys(atom[0] for atom in task.invented))
+
+
+def _invented_atoms(task: TaskModel, capacity: int, predicate_capacity: int) -> InventedAtoms:
+    """The device form of the task's invented atoms and their predicates, padded to the capacities."""
     grammar, names = task.model.grammar, task.view.names
-    predicates = {p.name: p for p in grammar.unary + grammar.relations + grammar.all_at + grammar.spans}
+    by_name = {p.name: p for p in grammar.unary + grammar.relations + grammar.all_at + grammar.spans}
+    predicates = [by_name[name] for name in _invented_predicates(task)]
     type_ids = {t: i for i, t in enumerate(type(task.env).object_types)}
-    kind, rows, members = np.full(capacity, NO_ATOM, np.int32), np.zeros((capacity, 2), np.int32), np.zeros(capacity, np.int32)
-    feature, other = np.zeros((capacity, 2), np.int32), np.full((capacity, 2), -1, np.int32)
-    threshold, above, used = np.zeros((capacity, 2), np.float32), np.zeros((capacity, 2), bool), np.zeros((capacity, 2), bool)
-    for j, atom in enumerate(task.invented):
-        p, args = predicates[atom[0]], [names.index(a) for a in atom[1:]]
-        rows[j] = (args[0], args[-1])
+    P = predicate_capacity
+    feature, other, members = np.zeros((P, 2), np.int32), np.full((P, 2), -1, np.int32), np.zeros(P, np.int32)
+    threshold, above, used = np.zeros((P, 2), np.float32), np.zeros((P, 2), bool), np.zeros((P, 2), bool)
+    for i, p in enumerate(predicates):
         unary = p.unary if isinstance(p, (AllAt, Span)) else p
         if isinstance(unary, (Literal, Either)):
             for k, lit in enumerate((unary.guard, unary.literal) if isinstance(unary, Either) else (unary,)):
-                feature[j, k], threshold[j, k], above[j, k], used[j, k] = lit.feature, lit.threshold, lit.above, True
-                other[j, k] = -1 if lit.other is None else lit.other
+                feature[i, k], threshold[i, k], above[i, k], used[i, k] = lit.feature, lit.threshold, lit.above, True
+                other[i, k] = -1 if lit.other is None else lit.other
         if isinstance(p, (AllAt, Span)):
-            members[j] = type_ids[p.unary.type]
+            members[i] = type_ids[p.unary.type]
+    kind, predicate, rows = np.full(capacity, NO_ATOM, np.int32), np.zeros(capacity, np.int32), np.zeros((capacity, 2), np.int32)
+    index = {p.name: i for i, p in enumerate(predicates)}
+    for j, atom in enumerate(task.invented):
+        p, args = by_name[atom[0]], [names.index(a) for a in atom[1:]]
+        predicate[j], rows[j] = index[atom[0]], (args[0], args[-1])
         self_relation = isinstance(p, SamePlace) and args[0] == args[-1]  # one the grammar never states
         kind[j] = NO_ATOM if self_relation else {SamePlace: SAME_PLACE, Before: BEFORE, AllAt: ALL_AT, Span: SPAN}.get(type(p), UNARY)
-    return InventedAtoms(kind, rows, feature, other, threshold, above, used, members)
+    return InventedAtoms(kind, predicate, rows, feature, other, threshold, above, used, members)
 
 
-def _model_table(task: TaskModel, atoms: int, operators: int) -> ModelTable:
-    """The task's invented atoms (padded to `atoms`) and the model's lifted operators' skills and samplers
-    (padded to `operators`)."""
+def _model_table(task: TaskModel, atoms: int, predicates: int, operators: int) -> ModelTable:
+    """The task's invented atoms (padded to `atoms`, their predicates to `predicates`) and the model's
+    lifted operators' skills and samplers (padded to `operators`)."""
     env, width = task.env, task.env.object_width + 1
     skill, weights = np.zeros(operators, np.int32), np.zeros((operators, width), np.float32)
     sampled, low, high = np.zeros(operators, bool), np.zeros(operators, np.float32), np.zeros(operators, np.float32)
@@ -193,14 +202,14 @@ def _model_table(task: TaskModel, atoms: int, operators: int) -> ModelTable:
         skill[i] = env.skill_index(op.skill)
         if (sampler := task.model.samplers.get(op.name)) is not None:
             weights[i], sampled[i], low[i], high[i] = sampler.weights, True, sampler.low, sampler.high
-    return ModelTable(_invented_atoms(task, atoms), np.array([n is not None for n in task.view.names]), skill, weights,
+    return ModelTable(_invented_atoms(task, atoms, predicates), np.array([n is not None for n in task.view.names]), skill, weights,
                       sampled, low, high, slots=env.num_objects, place_tolerance=PLACE_TOLERANCE)
 
 
-def compile_model_task(planner: LearnedPlanner, atoms: int, operators: int) -> CompiledTask:
+def compile_model_task(planner: LearnedPlanner, atoms: int, predicates: int, operators: int) -> CompiledTask:
     """`planner`'s task's plan table: the env model's operators; as rows the plan from the first state and
     every state the planner has answered (a task met again finds them in the table); the learned model's
-    part at capacities `atoms` (invented atoms) and `operators` (lifted operators)."""
+    part at capacities `atoms` (invented atoms), `predicates` (theirs) and `operators` (lifted operators)."""
     task = planner.task
     own, words = compiled_task(task.env, task.spec), num_words(task.env.num_atoms + atoms)
     init = task.bits(task.model.atoms(task.view))
@@ -209,8 +218,8 @@ def compile_model_task(planner: LearnedPlanner, atoms: int, operators: int) -> C
         states.append(state)
         state = entry.next_state | (state & ~planner.checked)  # what the model predicts, the rest as it was
     states = list(dict.fromkeys(states + [s for s, e in planner.cache.items() if e.op != NO_OPERATOR])) or [init]
-    if (atoms, operators) not in planner.model_tables:
-        planner.model_tables[atoms, operators] = _model_table(task, atoms, operators)
+    if (atoms, predicates, operators) not in planner.model_tables:
+        planner.model_tables[atoms, predicates, operators] = _model_table(task, atoms, predicates, operators)
     planner.uid = planner.uid or register_planner(planner)
     key = lambda s: bits_to_words(s, words)
     table = own.table.replace(
@@ -219,7 +228,7 @@ def compile_model_task(planner: LearnedPlanner, atoms: int, operators: int) -> C
         next_op=np.array([planner.decide(s).op for s in states], np.int32),
         next_keys=np.stack([key(planner.decide(s).next_state) for s in states]),
         op_pre=np.pad(own.table.op_pre, ((0, 0), (0, words - own.table.op_pre.shape[1]))),
-        model=planner.model_tables[atoms, operators])
+        model=planner.model_tables[atoms, predicates, operators])
     return CompiledTask(planner.uid, own.problem, own.ground_ops, planner, init, table, len(states))
 
 
@@ -248,8 +257,9 @@ def model_batch(env: NoveltyEnv, specs: list, owners: list[int], models: dict[in
             planners[owner, spec, env] = LearnedPlanner.of(env, spec, models[owner])
     mine = {(o, s): planners[o, s, env] for o, s in dict.fromkeys(zip(owners, specs))}
     atoms = _capacity(max(len(p.task.invented) for p in mine.values()))
+    predicates = _capacity(max(len(_invented_predicates(p.task)) for p in mine.values()))
     operators = _capacity(max(len(m.domain.operators) for m in models.values()))
-    compiled = {k: compile_model_task(p, atoms, operators) for k, p in mine.items()}
+    compiled = {k: compile_model_task(p, atoms, predicates, operators) for k, p in mine.items()}
     horizons = [s.horizon for s in specs] if horizons is None else horizons
     chosen = [compiled[o, s] for o, s in zip(owners, specs)]
     rows = _capacity(max(c.table.state_keys.shape[0] for c in chosen))
