@@ -7,6 +7,7 @@ names, its parameter, the `View` before and after, and how many env steps it too
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import jax
 import numpy as np
@@ -61,12 +62,17 @@ class TaskReader:
         return View(self.names, tuple(self.type_names[t] for t in type_id), features, position, given)
 
 
+@partial(jax.jit, static_argnums=0)
+def _recorded_views(env: NoveltyEnv, states):
+    """The object view and abstract atoms of every recorded state [T, B] (compiled once per env)."""
+    return jax.vmap(jax.vmap(env.objects))(states), jax.vmap(jax.vmap(env.abstract))(states)
+
+
 def segments_from_records(env: NoveltyEnv, specs: list, records) -> list[Segment]:
     """Every completed skill call of the recorded episodes (`StepRecord[T, B]`, episode b ran `specs[b]`):
     consecutive live steps of one actor with one skill, slot and parameter, ended by the state after its
     last step (the next record's: an episode that is done keeps its state; the last record has none)."""
-    objects = jax.vmap(jax.vmap(env.objects))(records.env_state)
-    abstract = np.asarray(jax.vmap(jax.vmap(env.abstract))(records.env_state))
+    objects, abstract = jax.tree.map(np.asarray, _recorded_views(env, records.env_state))
     type_id, features, position = (np.asarray(x) for x in (objects.type_id, objects.features, objects.position))
     live, actor, decided = (np.asarray(x) for x in (records.live, records.actor, records.decided))
     skill, slot, param = (np.asarray(x) for x in (records.skill, records.slot, records.param))
