@@ -83,20 +83,18 @@ def parse_args(argv):
                              "(with 10 tasks per seed, K = 23 is the third seed's task 3); default: the solved task "
                              "of the first seed on which the bridge opened the most doors (the first of those; "
                              "task 0 if none is solved)")
-    parser.add_argument("--attention", action="store_true",
-                        help="with a RUN of ours_learned_selection: per seed, how often the object its attention weighs "
-                             "most at a bridge decision is the one the env's fix acts on (the oracle's); then how often "
-                             "that object is the nearest candidate, the distance rank of what the misses looked at, the "
-                             "seeds that look right but fail, and how often it is looked at by the action chosen")
+    parser.add_argument("--attention", action="store_true", help="with a RUN of ours_learned_selection: per seed, how "
+                        "often its attention at a bridge decision is on the object the env's fix acts on, and why not")
     parser.add_argument("--planner-alone", action="store_true",
                         help="with a RUN of ours_model_repair: its learned model's planner alone, no bridge (a stall "
                              "is a failure), on the RUN's tasks (its test tasks, --test-protocol's, --task-size's or --sweep's)")
+    parser.add_argument("--domain", type=Path, default=None, metavar="FILE.pddl", help="with a RUN of ours_model_repair: "
+                        "plan with this PDDL domain (its models/seed<N>.pddl, edited or not) as every seed's model")
     parser.add_argument("--cycle", type=positive_int, default=None, metavar="N",
                         help="with RUNs: evaluate the checkpoint saved after cycle N (a run keeps its latest two and "
                              "those of train.py --keep-cycles) (default: the latest)")
-    parser.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB",
-                        help="refuse an evaluation whose plan tables are estimated to exceed this many GiB "
-                             "(default: the memory available when it starts)")
+    parser.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB", help="refuse an evaluation "
+                        "whose plan tables are estimated to exceed this many GiB (default: the memory available)")
     parser.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return parser.parse_args(argv)
 
@@ -119,6 +117,8 @@ def check_flags(args) -> None:
                 (args.planner_alone and len(args.runs) != 1 and not args.sweep, "--planner-alone evaluates one RUN (or --sweep's)"),
                 (args.test_protocol is not None and args.runs and (args.sweep is not None or args.task_size is not None),
                  "--test-protocol picks a RUN's test tasks; it does not combine with --sweep or --task-size"),
+                (args.domain is not None and (len(args.runs) != 1 or args.sweep is not None),
+                 "--domain replaces one RUN's learned models; give one RUN (not with --sweep)"),
                 (args.cycle is not None and (not args.runs or args.sweep is not None),
                  "--cycle picks a trained RUN's checkpoint to evaluate; give a RUN (not with --sweep)")]
     for path, suffix, flag in ((args.render, ".png", "--render"), (args.gif, ".gif", "--gif")):
@@ -171,7 +171,7 @@ def main(argv=None) -> int:
     check_flags(args)
     if args.sweep is not None:
         return sweep(args)
-    policies = {str(run): jaxbridge.load(run, args.approach, args.cycle) for run in args.runs}
+    policies = {str(run): jaxbridge.load(run, args.approach, args.cycle, args.domain) for run in args.runs}
     envs = {policy.config.env for policy in policies.values()}
     if len(envs) > 1:
         raise jaxbridge.InputError(f"side by side needs runs of one env, got {', '.join(sorted(envs))}")

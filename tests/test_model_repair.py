@@ -20,6 +20,7 @@ from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.evaluate import batch_rollout, run_bridge
 from jaxbridge.run.model_repair import LEARNED_CSV, ModelRepair
 from jaxbridge.run.runner import Interrupted, train
+from run_helpers import cli_in_process
 from planner import read_domain
 
 BOTH_LOCKS = "held_out"  # Multi Novelty's protocol of doors with both locks, which no training task holds
@@ -92,6 +93,16 @@ def test_a_repair_run_relearns_writes_its_domains_and_resumes_exactly(tmp_path):
     policy = jaxbridge.load(tmp_path / "straight")  # evaluated with the model it planned with at its last cycle
     assert policy.tasks().arrays.tables.model is not None
     assert policy.planner_alone(test_protocol=BOTH_LOCKS).success.all()
+    written = (tmp_path / "straight" / "models" / "seed0.pddl").read_text()
+    unrepaired = tmp_path / "unrepaired.pddl"  # the learned domain with its learned operators taken out
+    head, *actions = written.rstrip().removesuffix(")").split("  (:action")  # define's closing paren put back below
+    unrepaired.write_text(head + "".join("  (:action" + a for a in actions if not a.split()[0].split("_")[-1].isdigit()) + ")")
+    assert not jaxbridge.load(tmp_path / "straight", domain=unrepaired).planner_alone(test_protocol=BOTH_LOCKS).success.any()
+    for bad, why in ((written.replace("(:action", "(:acton", 1), "not supported"),
+                     (written.replace("RobotInCell", "RobotAt"), "predicate RobotAt is not defined here")):
+        (tmp_path / "bad.pddl").write_text(bad)
+        refused = cli_in_process("eval.py", str(tmp_path / "straight"), "--domain", str(tmp_path / "bad.pddl"), "--planner-alone")
+        assert refused.returncode == 2 and why in refused.stderr and len(refused.stderr.strip().splitlines()) == 1
     policy.trained = dataclasses.replace(policy.trained, models=None)
     with pytest.raises(jaxbridge.InputError, match="learns no planner model"):
         policy.planner_alone()

@@ -168,6 +168,30 @@ class Policy(Bridges):
         alone.label = f"learned planner alone of {self.config.approach}, cycle {self.cycle}"
         return alone
 
+    def with_domain(self, path: str | Path) -> "Policy":
+        """This repair run planning with the PDDL domain in `path` (a run's models/seed<N>.pddl, edited or
+        not) as every seed's model, each seed's samplers by operator name; InputError, in one line, for a
+        run that learns no model, a file that does not read as a domain, or a foreign one (a type,
+        predicate or skill some seed's model does not define)."""
+        from planner import PDDLError, read_domain
+
+        if self.trained.models is None:
+            raise InputError(f"{self.config.approach} learns no planner model: a domain file replaces a model repair "
+                             f"run's (ours_model_repair)")
+        try:
+            domain = read_domain(Path(path).read_text())
+        except (OSError, UnicodeDecodeError, PDDLError) as err:
+            raise InputError(f"{path}: {err}") from None
+        skills = [skill.name for skill in load_env(self.config.env).skills]
+        with_domain = copy.copy(self)
+        try:
+            models = {seed: model.with_domain(domain, skills) for seed, model in self.trained.models.items()}
+        except InputError as err:
+            raise InputError(f"{path}: {err}") from None
+        with_domain.trained = dataclasses.replace(self.trained, models=models)
+        with_domain.label = f"{self.label}, domain {Path(path).name}"
+        return with_domain
+
     def attention(self, episodes: Episodes, rollout_seed: int = 0):
         """What a learned object selector (ours_learned_selection) looks at on `episodes`' tasks: per seed,
         the fraction of bridge decisions whose most attended object is the one the env's fix acts on
@@ -202,11 +226,14 @@ class Policy(Bridges):
             return policy_tasks(self.trained, sized, num_tasks, limit, seeds=seeds, specs=tasks, protocol=test_protocol)
 
 
-def load(run_dir: str | Path, approach: str | None = None, cycle: int | None = None) -> Policy:
+def load(run_dir: str | Path, approach: str | None = None, cycle: int | None = None,
+         domain: str | Path | None = None) -> Policy:
     """The trained policy of a run directory (train.py's runs/ENV/APPROACH, or `train(..., out=...)`'s); an
     experiment directory gives its `approach` run (default ours; approach@setting in a sweep). `cycle`: the
-    checkpoint saved after that cycle (a run keeps its latest two and those of its `keep_cycles`)."""
-    return Policy(run_directory(Path(run_dir), approach), cycle)
+    checkpoint saved after that cycle (a run keeps its latest two and those of its `keep_cycles`).
+    `domain`: a repair run planning with that PDDL file's domain (`Policy.with_domain`)."""
+    policy = Policy(run_directory(Path(run_dir), approach), cycle)
+    return policy if domain is None else policy.with_domain(domain)
 
 
 def run_directory(path: Path, approach: str | None = None) -> Path:

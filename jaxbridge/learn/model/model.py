@@ -2,6 +2,7 @@
 and its atoms of a state (planning.py plans with it)."""
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from envs_jax.base import NoveltyEnv
@@ -30,6 +31,20 @@ class LearnedModel:
     def pddl(self, learned_only: bool = False) -> str:
         """The model as a PDDL domain; `learned_only`: with the learned operators alone (what to read)."""
         return domain_pddl(replace(self.domain, operators=self.learned_operators) if learned_only else self.domain)
+
+    def with_domain(self, domain: Domain, skills: Sequence[str]) -> "LearnedModel":
+        """This model planning with `domain` (this model's written as PDDL, edited or not), its samplers by
+        operator name; InputError for a foreign one: a type, predicate (or its arguments' types) or skill
+        (one of `skills`, the env's) this model does not define."""
+        known = dict(self.domain.predicates) | self.grammar.signatures
+        foreign = ([f"type {t}" for t in domain.types if t not in self.domain.types]
+                   + [f"predicate {n}{'' if n not in known else ' with arguments ' + ' '.join(s)}"
+                      for n, s in domain.predicates.items() if tuple(known.get(n, ())) != tuple(s)]
+                   + [f"skill {op.skill} (action {op.name})" for op in domain.operators if op.skill not in skills])
+        if foreign:
+            raise InputError(f"domain {domain.name} is not this model's: {foreign[0]} is not defined here"
+                             + (f" (and {len(foreign) - 1} more)" if len(foreign) > 1 else ""))
+        return replace(self, domain=domain)
 
     @property
     def learned_operators(self) -> tuple[LiftedOperator, ...]:
