@@ -76,7 +76,7 @@ def cycle_rows(run: Path) -> list[dict]:
         if (run / name / LEARNED_CSV).is_file():
             with open(run / name / LEARNED_CSV, newline="") as f:
                 learned = {(int(r["seed"]), int(r["cycle"])): r["learned_operators"] for r in csv.DictReader(f)}
-        for i, seed in enumerate(metrics["seeds"]):
+        for i, seed in enumerate(read.seeds):
             rows += [{"approach": name, "seed": seed, "cycle": c + 1,
                       "test_solve_rate": f"{metrics['test_solve_rate'][i, c]:.4f}",
                       "test_decisions": f"{metrics['test_decisions'][i, c]:.4f}",
@@ -92,8 +92,8 @@ class ModelRepair(Study):
     regenerate = tuple(("--env", env, "--seeds", "400-431") for env in ENVS)
 
     def flags(self, parser) -> None:
-        parser.add_argument("--cost-cycles", type=int, default=16, help="cycles of the cost step (default: %(default)s: "
-                                                                        "relearning after 1, 2, 4, 8 and 16 among them)")
+        parser.add_argument("--cost-cycles", type=int, default=None, help="cycles of the cost step (default: --cycles': "
+                                                                          "its mean holds the relearning of a run that long)")
 
     def steps(self, args, steps: Steps) -> dict:
         names, run = list(APPROACHES[args.env]), args.runs / f"{args.env}-{args.seeds}"
@@ -109,7 +109,7 @@ class ModelRepair(Study):
             done["oracle"] = steps.run("oracle", lambda: dict(zip(("rows", "wall_s"), oracle_rows(args.env, [protocol], args.seed_list))))
         done["cost"] = steps.run("cost", lambda: run_child(
             ["python", "-m", "bench.timings.training", "--env", args.env, "--seeds", f"0-{min(len(args.seed_list), 4) - 1}",
-             "--cycles", str(args.cost_cycles), "--approach", "ours,ours_model_repair"], keep_stdout=True))
+             "--cycles", str(args.cost_cycles or args.cycles), "--approach", "ours,ours_model_repair"], keep_stdout=True))
         return done
 
     def write(self, args, done: dict, out: Path) -> dict:
