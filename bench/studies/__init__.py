@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib
 
-NAMES = ("paper", "plan_repair", "learners", "selection", "multi_novelty", "fix_length")
+NAMES = ("paper", "plan_repair", "learners", "selection", "multi_novelty", "model_repair", "fix_length")
 
 
 def studies() -> list:

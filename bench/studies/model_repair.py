@@ -89,7 +89,7 @@ class ModelRepair(Study):
     name, doc, page = "model_repair", __doc__, "docs/results/model_repair.md"
     envs, seeds, stem_by_seeds = ENVS, "0-7", True
     env_help = "the env to run on"
-    regenerate = tuple(("--env", env, "--seeds", "400-431") for env in ENVS)
+    regenerate = tuple(("--env", env, "--seeds", seeds) for seeds in ("400-431", "0-7") for env in ENVS)
 
     def flags(self, parser) -> None:
         parser.add_argument("--cost-cycles", type=int, default=None, help="cycles of the cost step (default: --cycles': "
