@@ -239,6 +239,9 @@ def _with_rows(table, rows: int):
                          next_op=pad(table.next_op, NO_OPERATOR), next_keys=pad(table.next_keys, 0))
 
 
+MIN_ROWS = 128  # plan rows at least: the states a task's first cycles answer fit, so its program compiles once
+
+
 def _capacity(n: int) -> int:
     """The next power of two: a model that grows a little keeps its shapes, and a cycle its program."""
     return 1 << max(0, n - 1).bit_length()
@@ -262,7 +265,7 @@ def model_batch(env: NoveltyEnv, specs: list, owners: list[int], models: dict[in
     compiled = {k: compile_model_task(p, atoms, predicates, operators) for k, p in mine.items()}
     horizons = [s.horizon for s in specs] if horizons is None else horizons
     chosen = [compiled[o, s] for o, s in zip(owners, specs)]
-    rows = _capacity(max(c.table.state_keys.shape[0] for c in chosen))
+    rows = _capacity(max(MIN_ROWS, *(c.table.state_keys.shape[0] for c in chosen)))
     chosen[0] = dataclasses.replace(chosen[0], table=_with_rows(chosen[0].table, rows))  # the stack pads the rest
     arrays = TaskArrays(tasks=env.stack_tasks(specs), tables=stack_tables(chosen), horizons=jnp.asarray(horizons, jnp.int32))
     return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(owners), compiled=chosen, arrays=arrays)
