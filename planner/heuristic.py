@@ -12,15 +12,7 @@ import heapq
 import itertools
 from dataclasses import dataclass
 
-from planner.search import BitOperator, by_lowest_precondition, successors
-
-
-def _bits(mask: int):
-    """The indices of the set bits of `mask`, lowest first."""
-    while mask:
-        low = mask & -mask
-        yield low.bit_length() - 1
-        mask ^= low
+from planner.search import BitOperator, by_lowest_precondition, candidates, set_bits, successors
 
 
 class Relaxation:
@@ -33,7 +25,7 @@ class Relaxation:
         self.free = [i for i, op in enumerate(ops) if op.pre == 0]
         self.by_pre: dict[int, list[int]] = {}
         for i, op in enumerate(ops):
-            for atom in _bits(op.pre):
+            for atom in set_bits(op.pre):
                 self.by_pre.setdefault(atom, []).append(i)
 
     def achievers(self, state: int, goal: int) -> tuple[int, dict[int, int]] | None:
@@ -42,7 +34,7 @@ class Relaxation:
         missing = list(self.pre_count)
         reached, frontier, ready, layer, achiever = state, state, list(self.free), 0, {}
         while reached & goal != goal:
-            for atom in _bits(frontier):  # operators whose last precondition was reached last layer
+            for atom in set_bits(frontier):  # operators whose last precondition was reached last layer
                 for i in self.by_pre.get(atom, ()):
                     missing[i] -= 1
                     if missing[i] == 0:
@@ -50,7 +42,7 @@ class Relaxation:
             frontier = 0
             for i in sorted(ready):  # lowest index first: the achievers, so h_ff, are deterministic
                 new = self.ops[i].add & ~reached & ~frontier
-                for atom in _bits(new):
+                for atom in set_bits(new):
                     achiever[atom] = i
                 frontier |= new
             if not frontier:
@@ -62,18 +54,24 @@ class Relaxation:
         found = self.achievers(state, goal)
         return None if found is None else found[0]
 
-    def h_ff(self, state: int, goal: int) -> int | None:
+    def relaxed_plan(self, state: int, goal: int) -> frozenset[int] | None:
+        """h_ff's relaxed plan from `state`: each open atom's achiever, back from the goal; None where the
+        relaxed goal is unreachable."""
         found = self.achievers(state, goal)
         if found is None:
             return None
         achiever, plan = found[1], set()
-        open_atoms = list(_bits(goal & ~state))
+        open_atoms = list(set_bits(goal & ~state))
         while open_atoms:  # each achiever's preconditions were reached a layer earlier: this ends
             op = achiever[open_atoms.pop()]
             if op not in plan:
                 plan.add(op)
-                open_atoms += _bits(self.ops[op].pre & ~state)
-        return len(plan)
+                open_atoms += set_bits(self.ops[op].pre & ~state)
+        return frozenset(plan)
+
+    def h_ff(self, state: int, goal: int) -> int | None:
+        plan = self.relaxed_plan(state, goal)
+        return None if plan is None else len(plan)
 
 
 def h_max(ops: list[BitOperator], state: int, goal: int) -> int | None:
@@ -143,8 +141,7 @@ def astar(ops: list[BitOperator], goal: int, root: int, heuristic=h_ff) -> Searc
         if state & goal == goal:
             return SearchResult(path_to(parent, state), expanded, next(order) - 1)
         expanded += 1
-        candidates = sorted(always + [i for bit in _bits(state) for i in keyed.get(bit, ())])
-        for op, nxt in successors(ops, state, candidates):
+        for op, nxt in successors(ops, state, candidates(always, keyed, state)):
             if g + 1 >= best_g.get(nxt, g + 2) or nxt in dead:
                 continue
             h = evaluate(nxt)

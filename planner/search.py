@@ -55,6 +55,19 @@ def by_lowest_precondition(ops: list[BitOperator]) -> tuple[list[int], dict[int,
     return always, keyed
 
 
+def set_bits(mask: int):
+    """The indices of the set bits of `mask`, lowest first."""
+    while mask:
+        low = mask & -mask
+        yield low.bit_length() - 1
+        mask ^= low
+
+
+def candidates(always: list[int], keyed: dict[int, list[int]], state: int) -> list[int]:
+    """The operators that may apply in `state` (by `by_lowest_precondition`'s index), in index order."""
+    return sorted(always + [i for bit in set_bits(state) for i in keyed.get(bit, ())])
+
+
 def reachable(ops: list[BitOperator], root: int) -> dict[int, list[tuple[int, int]]]:
     """Every state reachable from `root` (in breadth-first order) with its outgoing edges."""
     always, keyed = by_lowest_precondition(ops)
@@ -64,12 +77,7 @@ def reachable(ops: list[BitOperator], root: int) -> dict[int, list[tuple[int, in
         s = queue.popleft()
         if s in graph:
             continue
-        candidates, bits = list(always), s
-        while bits:
-            low = bits & -bits
-            candidates += keyed.get(low.bit_length() - 1, ())
-            bits ^= low
-        graph[s] = successors(ops, s, sorted(candidates))
+        graph[s] = successors(ops, s, candidates(always, keyed, s))
         queue.extend(n for _, n in graph[s] if n not in graph)
     return graph
 

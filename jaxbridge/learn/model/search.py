@@ -15,8 +15,8 @@ from __future__ import annotations
 import heapq
 import itertools
 
-from planner.heuristic import Relaxation, _bits, path_to
-from planner.search import BitOperator, by_lowest_precondition, successors
+from planner.heuristic import Relaxation, path_to
+from planner.search import BitOperator, by_lowest_precondition, candidates, successors
 
 # The searches find_plan tries in turn: (helpful actions only, h_ff's weight). On Doorknobs' 7x7 maps with 10
 # doors to the goal, weight 1 finds 30-step plans (3 operators a door) from 450-2,500 evaluations or none
@@ -26,21 +26,6 @@ SEARCHES = ((True, 1), (True, 2), (False, 1))
 EVALUATIONS = 5000  # heuristic evaluations per search (~7 ms each on those maps): then no plan
 
 
-def relaxed_plan(relaxation: Relaxation, state: int, goal: int) -> frozenset[int] | None:
-    """h_ff's relaxed plan from `state`: each open atom's achiever (`Relaxation.achievers`), back from the
-    goal; None where the relaxed goal is unreachable. Its size is h_ff."""
-    found = relaxation.achievers(state, goal)
-    if found is None:
-        return None
-    achiever, chosen, open_atoms = found[1], set(), list(_bits(goal & ~state))
-    while open_atoms:
-        op = achiever[open_atoms.pop()]
-        if op not in chosen:
-            chosen.add(op)
-            open_atoms += _bits(relaxation.ops[op].pre & ~state)
-    return frozenset(chosen)
-
-
 def astar(relaxation: Relaxation, goal: int, root: int, helpful_only: bool, weight: int = 1,
           budget: int = EVALUATIONS) -> list[int] | None:
     """Weighted A* (unit costs, f = g + weight h_ff) from `root` to a state holding `goal`: operator indices, or None when
@@ -48,7 +33,7 @@ def astar(relaxation: Relaxation, goal: int, root: int, helpful_only: bool, weig
     Ties as planner.heuristic.astar's: the deeper state, then the earlier generated one, so runs repeat."""
     ops = relaxation.ops
     always, keyed = by_lowest_precondition(ops)
-    estimate = {root: relaxed_plan(relaxation, root, goal)}
+    estimate = {root: relaxation.relaxed_plan(root, goal)}
     if estimate[root] is None:
         return None
     order = itertools.count()
@@ -62,14 +47,13 @@ def astar(relaxation: Relaxation, goal: int, root: int, helpful_only: bool, weig
         if state & goal == goal:
             return path_to(parent, state)
         helpful = estimate[state]
-        candidates = sorted(always + [i for bit in _bits(state) for i in keyed.get(bit, ())])
-        for op, nxt in successors(ops, state, candidates):
+        for op, nxt in successors(ops, state, candidates(always, keyed, state)):
             if helpful_only and op not in helpful or g + 1 >= best_g.get(nxt, g + 2):
                 continue
             if nxt not in estimate:
                 if len(estimate) > budget:
                     return None
-                estimate[nxt] = relaxed_plan(relaxation, nxt, goal)
+                estimate[nxt] = relaxation.relaxed_plan(nxt, goal)
             if estimate[nxt] is not None:  # None: a dead end, the relaxed goal unreachable
                 best_g[nxt], parent[nxt] = g + 1, (state, op)
                 heapq.heappush(queue, (g + 1 + weight * len(estimate[nxt]), -(g + 1), next(order), nxt))
