@@ -78,8 +78,7 @@ def task_model(env: NoveltyEnv, spec, model: LearnedModel) -> TaskModel:
     """Task `spec` under `model`: every binding of its invented predicates to the task's objects indexed."""
     reader = TaskReader(env, spec)
     state = env.reset(jax.tree.map(jnp.asarray, env.task_arrays(spec)))
-    seen = jax.tree.map(np.asarray, env.objects(state))
-    view = reader.view(seen.type_id, seen.features, seen.position, np.asarray(env.abstract(state)))
+    view = reader.observe(state)
     # sorted: the grounding's order, so its plans, must not follow the hash order of a set
     objects, problem = dict(sorted(typed_objects(view, model.domain).items())), env.planner_problem(spec)
     invented = [(name, *args) for name, types in model.domain.predicates.items() if name in model.grammar.signatures

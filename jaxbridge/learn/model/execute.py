@@ -9,7 +9,6 @@ from functools import partial
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from envs_jax.base import NoveltyEnv, SkillCall
 from jaxbridge.core.meta_policy import same_state
@@ -43,16 +42,6 @@ def _run_skill(env: NoveltyEnv, state, call: SkillCall, budget):
     return state, steps, changed
 
 
-@partial(jax.jit, static_argnums=0)
-def _objects(env: NoveltyEnv, state):
-    return env.objects(state), env.abstract(state)
-
-
-def _observed(env: NoveltyEnv, reader: TaskReader, state):
-    objects, abstract = jax.tree.map(np.asarray, _objects(env, state))
-    return reader.view(objects.type_id, objects.features, objects.position, abstract)
-
-
 def run_planner_alone(env: NoveltyEnv, model: LearnedModel, spec, horizon: int | None = None) -> PlannedEpisode:
     """One episode of `spec` acted by the learned model's plans alone."""
     reader, goal, planner = TaskReader(env, spec), env.planner_problem(spec).goal, ModelPlanner(model)
@@ -62,7 +51,7 @@ def run_planner_alone(env: NoveltyEnv, model: LearnedModel, spec, horizon: int |
     while steps < horizon:
         if bool(env.goal_reached(state)):
             return PlannedEpisode(True, steps, tuple(ran), "goal")
-        view = _observed(env, reader, state)
+        view = reader.observe(state)
         atoms = model.atoms(view)
         if not planned or atoms != expected:  # the plan's prediction failed (or it ran out): plan afresh
             planned = planner.plan(view, goal)

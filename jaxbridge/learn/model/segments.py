@@ -47,6 +47,7 @@ class TaskReader:
     """What one task's states mean to the planner: its atoms by index and the objects skills' slots name."""
 
     def __init__(self, env: NoveltyEnv, spec):
+        self.env = env
         problem = env.planner_problem(spec)
         ops = ground(problem)
         fluent = set(problem.init) | set(problem.goal) | {a for op in ops for a in op.pre | op.add | op.delete}
@@ -61,11 +62,19 @@ class TaskReader:
         given = frozenset(self.atoms[i] for i in np.flatnonzero(abstract) if i in self.atoms) | self.static
         return View(self.names, tuple(self.type_names[t] for t in type_id), features, position, given)
 
+    def observe(self, state) -> View:
+        """The view of one env state of the task."""
+        objects, abstract = jax.tree.map(np.asarray, _seen(self.env, state))
+        return self.view(objects.type_id, objects.features, objects.position, abstract)
 
-@partial(jax.jit, static_argnums=0)
-def _recorded_views(env: NoveltyEnv, states):
-    """The object view and abstract atoms of every recorded state [T, B] (compiled once per env)."""
-    return jax.vmap(jax.vmap(env.objects))(states), jax.vmap(jax.vmap(env.abstract))(states)
+
+def _objects_and_atoms(env: NoveltyEnv, state):
+    return env.objects(state), env.abstract(state)
+
+
+# compiled once per env (an env is equal by value): one state, and every recorded state [T, B]
+_seen = jax.jit(_objects_and_atoms, static_argnums=0)
+_recorded_views = jax.jit(lambda env, states: jax.vmap(jax.vmap(partial(_objects_and_atoms, env)))(states), static_argnums=0)
 
 
 def segments_from_records(env: NoveltyEnv, specs: list, records) -> list[Segment]:
@@ -73,7 +82,7 @@ def segments_from_records(env: NoveltyEnv, specs: list, records) -> list[Segment
     consecutive live steps of one actor with one skill, slot and parameter, ended by the state after its
     last step (the next record's: an episode that is done keeps its state; the last record has none)."""
     objects, abstract = jax.tree.map(np.asarray, _recorded_views(env, records.env_state))
-    type_id, features, position = (np.asarray(x) for x in (objects.type_id, objects.features, objects.position))
+    type_id, features, position = objects.type_id, objects.features, objects.position
     live, actor, decided = (np.asarray(x) for x in (records.live, records.actor, records.decided))
     skill, slot, param = (np.asarray(x) for x in (records.skill, records.slot, records.param))
     readers: dict = {}
