@@ -41,7 +41,6 @@ ENVS = ("multi_novelty", "light_switch_door", "doorknobs", "coffee")
 REPAIR = ("ours_model_repair", "ours_model_repair_given")
 APPROACHES = {env: ("ours", *REPAIR) for env in ENVS} | {
     "multi_novelty": ("ours", *REPAIR, "ours_learned_selection", "ours_per_signature")}
-LEARNED_CSV = "learned_operators.csv"  # a repair run's (jaxbridge.run.model_repair)
 
 
 def planner_alone_rows(run: Path, env: str) -> dict:
@@ -73,8 +72,8 @@ def cycle_rows(run: Path) -> list[dict]:
     read, rows = jaxbridge.read_experiment(run), []
     for name in read.approaches:
         metrics, learned = read.metrics[name], {}
-        if (run / name / LEARNED_CSV).is_file():
-            with open(run / name / LEARNED_CSV, newline="") as f:
+        if (run / name / jaxbridge.LEARNED_CSV).is_file():
+            with open(run / name / jaxbridge.LEARNED_CSV, newline="") as f:
                 learned = {(int(r["seed"]), int(r["cycle"])): r["learned_operators"] for r in csv.DictReader(f)}
         for i, seed in enumerate(read.seeds):
             rows += [{"approach": name, "seed": seed, "cycle": c + 1,

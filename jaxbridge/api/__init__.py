@@ -30,13 +30,14 @@ from jaxbridge.learn.learner import LearnerContractError, QLearner, check_learne
 from jaxbridge.learn.online import TrainOutput
 from jaxbridge.learn.setup import seed_keys
 from jaxbridge.run.attention import Attention
+from jaxbridge.run.model_repair import LEARNED_CSV
 from jaxbridge.run.runner import Interrupted, NumericalFault
 from jaxbridge.utils.errors import InputError
 from jaxbridge.utils.files import WriteError
 
 __all__ = ["ALL_APPROACHES", "APPROACHES", "Attention", "Bridges", "Drawn", "EnvContractError", "Episodes", "Experiment", "HandMade",
            "Hyper", "InputError", "LearnerContractError", "QLearner", "check_env", "check_learner",
-           "Interrupted", "LOW_LEVEL", "MODEL_REPAIR", "PlannedEpisodes", "learn_model", "plan_alone", "record_segments", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "SIGNATURE", "Policy", "SWEEP_TASKS",
+           "Interrupted", "LEARNED_CSV", "LOW_LEVEL", "MODEL_REPAIR", "PlannedEpisodes", "learn_model", "plan_alone", "record_segments", "NoveltySweep", "NumericalFault", "PLAN_REPAIR", "PRESETS", "SELECTION", "SIGNATURE", "Policy", "SWEEP_TASKS",
            "TrainConfig", "TrainOutput", "Training", "WriteError", "all_approaches", "default_approaches", "default_workers", "env_names", "hand_made",
            "load", "load_env", "local_devices", "make_config", "make_env", "make_train", "prepare", "prepare_resume",
            "preset_values", "read_experiment", "release_locks", "resume", "run_labels", "seed_keys", "settings_help", "side_by_side", "sweep_lines", "sweep_novelties", "tasks",
