@@ -94,7 +94,7 @@ def parse_args(argv):
                         help="with RUNs: evaluate the checkpoint saved after cycle N (a run keeps its latest two and "
                              "those of train.py --keep-cycles) (default: the latest)")
     parser.add_argument("--max-memory", type=positive_float, default=None, metavar="GIB", help="refuse an evaluation "
-                        "whose plan tables are estimated to exceed this many GiB (default: the memory available)")
+                        "whose plan tables would exceed this many GiB, or sweep a repair run's seeds in groups within it (default: available)")
     parser.add_argument("--no-compile-cache", action="store_true", help=compile_cache.HELP)
     return parser.parse_args(argv)
 
@@ -148,9 +148,9 @@ def sweep(args) -> int:
     if not out.is_dir():
         raise jaxbridge.InputError(f"--sweep-out: directory {out} does not exist")
     start = time.perf_counter()
-    result = jaxbridge.sweep_novelties(jaxbridge.sweep_lines(args.runs, args.approach),
-                                       args.sweep_tasks or jaxbridge.SWEEP_TASKS, args.sweep_seed or 0, args.rollout_seed,
-                                       progress=lambda label: print(f"  {label} ...", flush=True), planner_alone=args.planner_alone)
+    result = jaxbridge.sweep_novelties(jaxbridge.sweep_lines(args.runs, args.approach), args.sweep_tasks or jaxbridge.SWEEP_TASKS,
+                                       args.sweep_seed or 0, args.rollout_seed, lambda label: print(f"  {label} ...", flush=True),
+                                       args.planner_alone, args.max_memory)
     print(f"{result.title} ({time.perf_counter() - start:.1f} s including compilation)")
     print(result.markdown(), end="")
     result.write(out)

@@ -67,15 +67,16 @@ def sweep_lines(runs: list[str | Path], approach: str | None = None) -> dict[str
 
 def sweep_novelties(lines: Mapping[str, str | Path | Policy], tasks_per_count: int = SWEEP_TASKS,
                     sweep_seed: int = 0, rollout_seed: int = 0, progress: Callable[[str], None] = lambda label: None,
-                    planner_alone: bool = False) -> NoveltySweep:
+                    planner_alone: bool = False, max_memory: float | None = None) -> NoveltySweep:
     """Each line's policy (a Policy or a run directory) greedily on the env's sweep tasks: for each count of
     novelty instances (`env.novelty_sweep`), `tasks_per_count` tasks drawn from `sweep_seed`, the same for
     every seed and line; with `planner_alone`, each repair run's learned planner with no bridge
-    (`Policy.alone`). `progress(label)` is called as each line starts."""
+    (`Policy.alone`), its seeds in groups that fit `max_memory` GiB (default: what is available).
+    `progress(label)` is called as each line starts."""
     policies = {label: p if isinstance(p, Policy) else Policy(p) for label, p in lines.items()}
     if planner_alone:
         policies = {label: p.alone() for label, p in policies.items()}
     with refusing():  # runs of several envs, an env without a sweep
         result = evaluate_sweep({label: p.trained for label, p in policies.items()}, tasks_per_count, sweep_seed,
-                                rollout_seed, progress=progress)
+                                rollout_seed, progress, None if max_memory is None else int(max_memory * 2**30))
     return NoveltySweep(result, ", ".join(sorted({f"cycle {p.cycle}" for p in policies.values()})))

@@ -10,7 +10,7 @@ import numpy as np
 
 from envs_jax import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
-from jaxbridge.core.tasks import compiled_task, evaluation_specs, make_batch, test_specs, train_specs, training_specs
+from jaxbridge.core.tasks import TaskBatch, compiled_task, evaluation_specs, make_batch, test_specs, train_specs, training_specs
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.model_repair import KEPT_SEGMENTS
@@ -25,6 +25,10 @@ RUNTIME_BYTES = 1 << 30  # JAX, XLA's compiled programs and Python, before any s
 # the host, the padded stack, its device copy, and the host planner's cache plus the rollout's compare
 # against every row.
 TABLE_COPIES = 4
+# A task planned with a learned model peaks at about 14 times its batch row's bytes while it runs (measured
+# on Multi Novelty's sweep): the compiled table each task keeps, the stack, its device copy, and the
+# rollout reading every invented atom of its model at each step. 16 leaves a margin.
+MODEL_TABLE_COPIES = 16
 
 
 class TooBig(InputError):
@@ -85,6 +89,19 @@ def limit_bytes(limit: int | None) -> tuple[int, str]:
 def totals(count: int, each: int, limit: int) -> tuple[int, int]:
     """(bytes for `count` items of `each` bytes plus the runtime, how many such items fit in `limit`)."""
     return RUNTIME_BYTES + count * each, max(0, (limit - RUNTIME_BYTES) // each)
+
+
+def model_seeds_fit(one_seed: TaskBatch, limit: int | None = None) -> int:
+    """How many seeds' tasks, planned with their learned models, one evaluation batch holds within `limit`
+    bytes (default: what is available), from one seed's planned batch; TooBig if not even one seed's."""
+    limit, what = limit_bytes(limit)
+    per_seed = MODEL_TABLE_COPIES * tree_bytes(one_seed.arrays)
+    need, fit = totals(1, per_seed, limit)
+    if fit < 1:
+        raise TooBig(f"evaluating one seed's {len(one_seed.specs)} tasks with its learned model needs about "
+                     f"{need / 2**30:.1f} GiB, more than the {limit / 2**30:.1f} GiB {what}; draw fewer tasks "
+                     f"(--sweep-tasks) or raise --max-memory")
+    return fit
 
 
 def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], programs: list[tuple[TrainConfig, int]],

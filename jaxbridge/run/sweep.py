@@ -4,7 +4,8 @@ novelty instances than they trained or were tested on (`eval.py RUN --sweep nove
 Each env states its sweep (`NoveltySweep`: what is counted, the counts, how to draw a task with k of them
 and the task's horizon). The sweep's tasks are drawn once, from `sweep_seed`, and every seed of every
 approach meets the same ones, so two lines differ only by their policies. All counts go into one batch:
-one rollout (one compilation) per approach.
+one rollout (one compilation) per approach; a repair run's, whose tables are per seed and large, in as few
+groups of seeds as memory allows.
 """
 from __future__ import annotations
 
@@ -15,8 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from envs_jax.base import NoveltyEnv
-from jaxbridge.run.evaluate import TrainedPolicy
 from jaxbridge.core.tasks import TaskBatch, make_batch
+from jaxbridge.run.evaluate import TrainedPolicy
+from jaxbridge.run.memory import model_seeds_fit
 from jaxbridge.utils import stats
 
 
@@ -51,8 +53,9 @@ def sweep_batch(env_cls: type[NoveltyEnv], specs: list, seeds: list[int]) -> Tas
 
 
 def evaluate_sweep(policies: dict[str, TrainedPolicy], tasks_per_count: int = 10, sweep_seed: int = 0,
-                   rollout_seed: int = 0, progress=lambda label: None) -> SweepResult:
-    """Each policy (line label -> policy, all of one env) greedily on the sweep's tasks."""
+                   rollout_seed: int = 0, progress=lambda label: None, max_memory: int | None = None) -> SweepResult:
+    """Each policy (line label -> policy, all of one env) greedily on the sweep's tasks; a repair run's seeds
+    in groups that fit `max_memory` bytes (default: what is available)."""
     envs = {p.env_cls for p in policies.values()}
     if len(envs) != 1:
         raise ValueError(f"a sweep compares runs of one env, got {', '.join(sorted(e.name for e in envs))}")
@@ -70,15 +73,28 @@ def evaluate_sweep(policies: dict[str, TrainedPolicy], tasks_per_count: int = 10
         rate = np.full((len(seeds), len(sweep.counts)), np.nan)
         if visible:
             chosen = np.isin(counts, visible)
-            key = (tuple(seeds), visible)
-            if key not in batches:
-                batches[key] = sweep_batch(env_cls, list_of(specs, chosen), seeds)
-            success = policy.run(policy.planned(batches[key]), rollout_seed).success.reshape(len(seeds), -1)
+            success = []
+            for group in seed_groups(policy, env_cls, list_of(specs, chosen), seeds, max_memory):
+                key = (tuple(group), visible)
+                if key not in batches:
+                    batches[key] = sweep_batch(env_cls, list_of(specs, chosen), group)
+                success.append(policy.run(policy.planned(batches[key]), rollout_seed).success.reshape(len(group), -1))
+            success = np.concatenate(success)
             for j, k in enumerate(sweep.counts):
                 if k in visible:
                     rate[:, j] = success[:, counts[chosen] == k].mean(axis=1)
         rates[label], seeds_of[label] = rate, seeds
     return SweepResult(env_cls.name, sweep.counted, sweep.setting, sweep.counts, tasks_per_count, rates, seeds_of)
+
+
+def seed_groups(policy: TrainedPolicy, env_cls: type[NoveltyEnv], specs: list, seeds: list[int],
+                max_memory: int | None) -> list[list[int]]:
+    """The seeds in the groups evaluated one batch each: all together, unless the policy plans with learned
+    models (tables per seed, sized from its first seed's planned batch): then as many as fit."""
+    if policy.models is None:
+        return [seeds]
+    size = model_seeds_fit(policy.planned(sweep_batch(env_cls, specs, seeds[:1])), max_memory)
+    return [seeds[i:i + size] for i in range(0, len(seeds), size)]
 
 
 def list_of(specs: list, mask: np.ndarray) -> list:
