@@ -18,7 +18,7 @@ from jaxbridge.learn.model.segments import TaskReader
 from jaxbridge.learn.online import make_train
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.evaluate import TrainedPolicy, batch_rollout, run_bridge
-from jaxbridge.run.memory import MODEL_TABLE_COPIES, RUNTIME_BYTES, TooBig, tree_bytes
+from jaxbridge.run.memory import MODEL_TABLE_COPIES, RUNTIME_BYTES, TooBig, check_model_evaluation, tree_bytes
 from jaxbridge.run.model_repair import LEARNED_CSV, ModelRepair
 from jaxbridge.run.runner import Interrupted, train
 from jaxbridge.run.sweep import seed_groups, sweep_batch
@@ -154,7 +154,8 @@ def test_a_slot_is_learned_again_on_the_schedule_only_after_its_bridge_acted(mod
 
 def test_a_sweep_evaluates_a_repair_runs_seeds_in_groups_that_fit_its_memory(model):
     """Learned tables are per seed and large: a sweep sizes its groups of seeds from the first seed's planned
-    batch and the memory allowed, and refuses in one line when not even one seed's fits."""
+    batch and the memory allowed, and refuses in one line when not even one seed's fits, as an evaluation
+    refuses a planned batch its memory cannot hold."""
     specs = tasks.test_specs(MultiNovelty, 0, 3, BOTH_LOCKS)
     policy = TrainedPolicy(setup=None, step=0, learners=None, models={seed: model for seed in (0, 1, 2)})
     one_seed = policy.planned(sweep_batch(MultiNovelty, specs, [0]))
@@ -163,5 +164,7 @@ def test_a_sweep_evaluates_a_repair_runs_seeds_in_groups_that_fit_its_memory(mod
     assert seed_groups(policy, MultiNovelty, specs, [0, 1, 2], RUNTIME_BYTES + 2 * per_seed) == [[0, 1], [2]]
     with pytest.raises(TooBig, match="--sweep-tasks"):
         seed_groups(policy, MultiNovelty, specs, [0, 1, 2], RUNTIME_BYTES + per_seed // 2)
+    with pytest.raises(TooBig, match="--num-tasks"):
+        check_model_evaluation(one_seed, RUNTIME_BYTES + per_seed // 2)
     unplanned = dataclasses.replace(policy, models=None)
     assert seed_groups(unplanned, MultiNovelty, specs, [0, 1, 2], RUNTIME_BYTES) == [[0, 1, 2]]

@@ -16,7 +16,7 @@ from jaxbridge.core.meta_policy import Controls, EpisodeResult, MetaPolicy, roll
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.learn.approaches import Approach
 from jaxbridge.learn.setup import Setup
-from jaxbridge.run.memory import check_evaluation
+from jaxbridge.run.memory import check_evaluation, check_model_evaluation
 from jaxbridge.run.model_repair import load_models, planned_with
 from jaxbridge.run.runner import load_learners
 from jaxbridge.utils.progress import SlowWork
@@ -166,7 +166,8 @@ def policy_tasks(policy: TrainedPolicy, sized_specs=None, num_tasks: int = 10, m
     (default: the run's); or
     `num_tasks` per seed drawn by `sized_specs(rng) -> spec` (`sized_specs_per_seed`); or every spec
     of `specs` for each seed. Drawn or given tasks are refused with TooBig if their plan tables would
-    exceed `max_memory` bytes or the memory available; the env has its quirks as the run trained."""
+    exceed `max_memory` bytes or the memory available, and so are any tasks a repair run plans with its learned
+    models (tables per seed); the env has its quirks as the run trained."""
     config, env_cls = policy.config, policy.env_cls
     seeds = config.seeds if seeds is None else seeds
     if sized_specs is None and specs is None:
@@ -179,7 +180,10 @@ def policy_tasks(policy: TrainedPolicy, sized_specs=None, num_tasks: int = 10, m
         sweep = env_cls.novelty_sweep if sized else None  # its horizon rule scales with the tasks' size
         batch = make_batch(env_cls, specs, owners, horizons=[sweep.horizon(s) for s in specs] if sweep else None,
                            progress=SlowWork(f"{env_cls.name}: {'sized' if sized else 'given'} tasks and plan tables"))
-    return policy.planned(dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks)))
+    planned = policy.planned(dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks)))
+    if policy.models is not None:
+        check_model_evaluation(planned, max_memory)
+    return planned
 
 
 def format_comparison(evaluations: dict[str, list[SeedSummary]]) -> str:
