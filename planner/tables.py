@@ -10,6 +10,7 @@ lead the real world where the model never goes) is answered by the host planner 
 from __future__ import annotations
 
 import itertools
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -90,13 +91,15 @@ class PlanLookup:
     miss: jax.Array  # bool: the table lacked the state and the host planner was asked
 
 
-_HOST_PLANNERS: dict[int, HostPlanner] = {}
+# Held weakly: a planner lives while a task holds it (its CompiledTask in a batch or the compile cache, a
+# repair run's planners), so a sweep's thousands of learned planners go with their batches.
+_HOST_PLANNERS: weakref.WeakValueDictionary[int, HostPlanner] = weakref.WeakValueDictionary()
 _UIDS = itertools.count(1)
 
 
 def register_planner(planner) -> int:
     """The uid a table names `planner` by (anything with `decide(state) -> PolicyEntry`) for the host
-    fallback."""
+    fallback, while something else holds `planner`."""
     uid = next(_UIDS)
     _HOST_PLANNERS[uid] = planner
     return uid

@@ -1,6 +1,7 @@
 """The planner: optimal plan lengths (checked against pyperplan's A* + LM-cut), the compiled tables,
 and the host-callback path behind them."""
 import dataclasses
+import gc
 import itertools
 
 import jax
@@ -15,9 +16,9 @@ from envs_jax.doorknobs import maps as doorknobs_maps
 from envs_jax.light_switch_door import env as lsd
 from envs_jax.coffee.env import Coffee
 from envs_jax.doorknobs.env import Doorknobs
-from planner.search import NO_OPERATOR, UNREACHABLE, BitOperator, HostPlanner, optimal_policy
+from planner.search import NO_OPERATOR, UNREACHABLE, BitOperator, HostPlanner, PolicyEntry, optimal_policy
 from planner.strips import domain_pddl, ground, problem_pddl
-from planner.tables import bits_to_words, compile_task, host_lookup, table_lookup, words_to_bits
+from planner.tables import bits_to_words, compile_task, host_lookup, register_planner, table_lookup, words_to_bits
 
 ENV = lsd.LightSwitchDoor(max_cells=20, max_doors=4)
 
@@ -157,3 +158,20 @@ def test_light_switch_door_plan_bound_is_what_the_planner_finds():
         env = lsd.LightSwitchDoor(spec.num_cells, len(spec.door_cells))
         compiled = compile_task(env, spec)
         assert env.plan_bound(spec) == (compiled.num_reachable, len(compiled.ground_ops))
+
+
+def test_a_registered_planner_answers_only_while_something_holds_it():
+    """The host fallback names planners by uid without keeping them: a sweep's learned planners go with
+    their batches instead of piling up for the process's life."""
+    class Answering:
+        def decide(self, state: int) -> PolicyEntry:
+            return PolicyEntry(3, state | 1, 1)
+
+    planner = Answering()
+    uid, key, ask = jnp.asarray([register_planner(planner)], jnp.int32), jnp.zeros((1, 1), jnp.uint32), jnp.ones(1, bool)
+    found, op, _ = host_lookup(uid, key, ask)
+    assert bool(found[0]) and int(op[0]) == 3
+    del planner
+    gc.collect()
+    found, op, _ = host_lookup(uid, key, ask)
+    assert not bool(found[0]) and int(op[0]) == NO_OPERATOR

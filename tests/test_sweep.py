@@ -58,6 +58,7 @@ class FakePolicy:
     full_state: bool = False
     batches: list = None
     env_cls = LightSwitchDoor
+    models = None  # no learned models: every seed in one batch
 
     def can_see(self, env) -> bool:
         return env.full_state_fits or not self.full_state
