@@ -1,0 +1,24 @@
+(define (domain coffee-learned)
+  (:requirements :strips :typing)
+  (:types robot jug machine cup)
+  (:predicates (CupFilled ?a0 - cup) (Holding ?a0 - robot ?a1 - jug) (JugInMachine ?a0 - jug ?a1 - machine) (MachineOn ?a0 - machine) (OnTable ?a0 - jug) (HandEmpty ?a0 - robot) (JugFilled ?a0 - jug) (RobotAboveCup ?a0 - robot ?a1 - cup) (JugAboveCup ?a0 - jug ?a1 - cup) (NotAboveCup ?a0 - robot ?a1 - jug) (Twisting ?a0 - robot ?a1 - jug) (PressingButton ?a0 - robot ?a1 - machine) (NotSameCup ?a0 - cup ?a1 - cup) (jug_rot_above_m0p959 ?a0 - jug) (jug_rot_below_1p23 ?a0 - jug))
+  (:action PickJugFromTable
+    ; skill: PickJug
+    :parameters (?robot - robot ?jug - jug)
+    :precondition (and (OnTable ?jug) (HandEmpty ?robot) (jug_rot_above_m0p959 ?jug) (jug_rot_below_1p23 ?jug))
+    :effect (and (Holding ?robot ?jug) (not (OnTable ?jug)) (not (HandEmpty ?robot))))
+  (:action TwistJug_8
+    ; skill: TwistJug
+    :parameters (?jug0 - jug ?robot1 - robot)
+    :precondition (and (NotAboveCup ?robot1 ?jug0) (OnTable ?jug0) (Twisting ?robot1 ?jug0) (jug_rot_above_m0p959 ?jug0))
+    :effect (and (HandEmpty ?robot1) (jug_rot_below_1p23 ?jug0) (not (Twisting ?robot1 ?jug0))))
+  (:action TwistJug_9
+    ; skill: TwistJug
+    :parameters (?jug0 - jug ?robot1 - robot)
+    :precondition (and (NotAboveCup ?robot1 ?jug0) (OnTable ?jug0) (Twisting ?robot1 ?jug0) (jug_rot_above_m0p959 ?jug0))
+    :effect (and (HandEmpty ?robot1) (jug_rot_below_1p23 ?jug0) (not (Twisting ?robot1 ?jug0)) (not (jug_rot_above_m0p959 ?jug0))))
+  (:action TwistJug_10
+    ; skill: TwistJug
+    :parameters (?jug0 - jug ?robot1 - robot)
+    :precondition (and (NotAboveCup ?robot1 ?jug0) (OnTable ?jug0) (Twisting ?robot1 ?jug0) (jug_rot_below_1p23 ?jug0))
+    :effect (and (HandEmpty ?robot1) (jug_rot_above_m0p959 ?jug0) (not (Twisting ?robot1 ?jug0)))))
