@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import chex
 import jax
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from envs_jax.multi_novelty.env import MultiNovelty
 from jaxbridge.core.bridges import make_bridge
 from jaxbridge.core.learned_atoms import invented_holds
 from jaxbridge.core import tasks
-from jaxbridge.learn.model.device import model_batch
+from jaxbridge.learn.model.device import Capacities, model_batch
 from jaxbridge.learn.model.segments import TaskReader
 from jaxbridge.learn.online import make_train
 from jaxbridge.learn.setup import make_setup
@@ -64,11 +65,17 @@ def test_the_device_reads_the_invented_atoms_the_grammar_reads(model, planned):
     assert compared > 10
 
 
-def test_the_learned_models_tables_take_doors_with_both_locks_to_the_goal_on_the_device(planned):
-    """The meta-policy with the learned model's tables and no bridge solves what the env's model cannot."""
+def test_the_learned_models_tables_take_doors_with_both_locks_to_the_goal_on_the_device(model, planned):
+    """The meta-policy with the learned model's tables and no bridge solves what the env's model cannot, the
+    same step for step at a run's larger capacities (a later model may be smaller: the tables keep theirs)."""
     none = make_bridge("none", planned.env)
     repaired = run_bridge(planned, none)
     assert repaired.success.all() and (repaired.stuck_events == 0).all()
+    larger = Capacities.of(planned.arrays.tables)
+    larger = Capacities(2 * larger.atoms, 2 * larger.predicates, 2 * larger.operators, 2 * larger.rows)
+    padded = model_batch(planned.env, planned.specs, [0] * len(planned.specs), {0: model}, least=larger)
+    assert Capacities.of(padded.arrays.tables) == larger
+    chex.assert_trees_all_equal(run_bridge(padded, none), repaired)
     own = tasks.evaluation_batch(MultiNovelty, [0], len(planned.specs), protocol=BOTH_LOCKS)
     assert not run_bridge(own, none).success.any()
 

@@ -23,7 +23,7 @@ import jax
 import numpy as np
 
 from jaxbridge.core.tasks import TaskArrays, TaskBatch
-from jaxbridge.learn.model.device import LearnedPlanner, model_batch
+from jaxbridge.learn.model.device import Capacities, LearnedPlanner, model_batch
 from jaxbridge.learn.model.execute import run_planner_alone
 from jaxbridge.learn.model.model import LearnedModel, learn_model
 from jaxbridge.learn.model.segments import Segment, segments_from_records
@@ -51,6 +51,7 @@ class ModelRepair:
         self.segments: list[list[Segment]] = [[] for _ in range(slots)]
         self.models: list[LearnedModel | None] = [None] * slots
         self.planners: dict = {}  # (slot, spec, env) -> its host planner (learn/model/device.model_batch)
+        self.least = Capacities()  # every planned batch's so far: tables never shrink, so no cycle recompiles for it
         self.tabled = -1  # the planners' answers the cycle's tables hold (-1: none of theirs yet)
         self.learned: list[list[int]] = []  # per cycle, each slot's learned operators after it
         self.bridged = [False] * slots  # the bridge acted in the slot's training since its model was learned
@@ -117,7 +118,8 @@ class ModelRepair:
         for slot in slots:
             mine, their_horizons = self.seed_tasks(batch, slot)
             owner, specs, horizons = owner + [slot] * len(mine), specs + list(mine), horizons + their_horizons.tolist()
-        planned = model_batch(batch.env, specs, owner, dict(enumerate(self.models)), horizons, self.planners)
+        planned = model_batch(batch.env, specs, owner, dict(enumerate(self.models)), horizons, self.planners, self.least)
+        self.least = self.least.at_least(Capacities.of(planned.arrays.tables))
         return jax.tree.map(lambda x: np.reshape(np.asarray(x), (len(slots), -1) + x.shape[1:]), planned.arrays)
 
     def save(self, run_dirs: list[Path], seeds: list[int], cycle_number: int) -> None:

@@ -241,30 +241,52 @@ def _with_rows(table, rows: int):
 MIN_ROWS = 128  # plan rows at least: the states a task's first cycles answer fit, so its program compiles once
 
 
+@dataclass(frozen=True)
+class Capacities:
+    """A planned batch's padded sizes: invented atoms, their predicates, lifted operators and plan rows."""
+
+    atoms: int = 1
+    predicates: int = 1
+    operators: int = 1
+    rows: int = MIN_ROWS
+
+    @classmethod
+    def of(cls, tables) -> "Capacities":
+        """The capacities a batch's plan tables were padded to."""
+        invented = tables.model.invented
+        return cls(invented.kind.shape[-1], invented.feature.shape[-2], tables.model.op_skill.shape[-1],
+                   tables.state_keys.shape[-2])
+
+    def at_least(self, other: "Capacities") -> "Capacities":
+        return Capacities(*map(max, dataclasses.astuple(self), dataclasses.astuple(other)))
+
+
 def _capacity(n: int) -> int:
     """The next power of two: a model that grows a little keeps its shapes, and a cycle its program."""
     return 1 << max(0, n - 1).bit_length()
 
 
 def model_batch(env: NoveltyEnv, specs: list, owners: list[int], models: dict[int, LearnedModel],
-                horizons: list[int] | None = None, planners: dict | None = None) -> TaskBatch:
+                horizons: list[int] | None = None, planners: dict | None = None,
+                least: Capacities = Capacities()) -> TaskBatch:
     """A batch of `specs` (task b owned by `owners[b]`, under `env`, sized for them all) planned with each
     owner's learned model (owners are seeds, or a sweep's slots). `planners`: each (owner, spec, env)'s
     LearnedPlanner kept between batches (reused while the owner's model is the same), so a later batch's
-    tables hold the states the planners answered."""
+    tables hold the states the planners answered. Padded to at least `least` (a run's earlier batches'
+    capacities: a model that shrinks keeps the cycle's program)."""
     planners = {} if planners is None else planners
     for owner, spec in dict.fromkeys(zip(owners, specs)):
         kept = planners.get((owner, spec, env))
         if kept is None or kept.task.model is not models[owner]:
             planners[owner, spec, env] = LearnedPlanner.of(env, spec, models[owner])
     mine = {(o, s): planners[o, s, env] for o, s in dict.fromkeys(zip(owners, specs))}
-    atoms = _capacity(max(len(p.task.invented) for p in mine.values()))
-    predicates = _capacity(max(len(_invented_predicates(p.task)) for p in mine.values()))
-    operators = _capacity(max(len(m.domain.operators) for m in models.values()))
+    atoms = max(least.atoms, _capacity(max(len(p.task.invented) for p in mine.values())))
+    predicates = max(least.predicates, _capacity(max(len(_invented_predicates(p.task)) for p in mine.values())))
+    operators = max(least.operators, _capacity(max(len(m.domain.operators) for m in models.values())))
     compiled = {k: compile_model_task(p, atoms, predicates, operators) for k, p in mine.items()}
     horizons = [s.horizon for s in specs] if horizons is None else horizons
     chosen = [compiled[o, s] for o, s in zip(owners, specs)]
-    rows = _capacity(max(MIN_ROWS, *(c.table.state_keys.shape[0] for c in chosen)))
+    rows = max(least.rows, _capacity(max(MIN_ROWS, *(c.table.state_keys.shape[0] for c in chosen))))
     chosen[0] = dataclasses.replace(chosen[0], table=_with_rows(chosen[0].table, rows))  # the stack pads the rest
     arrays = TaskArrays(tasks=env.stack_tasks(specs), tables=stack_tables(chosen), horizons=jnp.asarray(horizons, jnp.int32))
     return TaskBatch(env=env, specs=list(specs), seeds=np.asarray(owners), compiled=chosen, arrays=arrays)
