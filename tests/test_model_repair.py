@@ -19,7 +19,7 @@ from jaxbridge.learn.model.segments import TaskReader
 from jaxbridge.learn.online import make_train
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.evaluate import TrainedPolicy, batch_rollout, run_bridge
-from jaxbridge.run.memory import MODEL_TABLE_COPIES, RUNTIME_BYTES, TooBig, check_model_evaluation, tree_bytes
+from jaxbridge.run.memory import MODEL_TABLE_COPIES, RUNTIME_BYTES, TooBig, model_batches_fit, tree_bytes
 from jaxbridge.run.model_repair import LEARNED_CSV, ModelRepair
 from jaxbridge.run.runner import Interrupted, train
 from jaxbridge.run.sweep import seed_groups, sweep_batch
@@ -172,6 +172,6 @@ def test_a_sweep_evaluates_a_repair_runs_seeds_in_groups_that_fit_its_memory(mod
     with pytest.raises(TooBig, match="--sweep-tasks"):
         seed_groups(policy, MultiNovelty, specs, [0, 1, 2], RUNTIME_BYTES + per_seed // 2)
     with pytest.raises(TooBig, match="--num-tasks"):
-        check_model_evaluation(one_seed, RUNTIME_BYTES + per_seed // 2)
+        model_batches_fit(one_seed, RUNTIME_BYTES + per_seed // 2)
     unplanned = dataclasses.replace(policy, models=None)
     assert seed_groups(unplanned, MultiNovelty, specs, [0, 1, 2], RUNTIME_BYTES) == [[0, 1, 2]]

@@ -16,7 +16,7 @@ from jaxbridge.core.meta_policy import Controls, EpisodeResult, MetaPolicy, roll
 from jaxbridge.core.tasks import TaskBatch, evaluation_batch, make_batch
 from jaxbridge.learn.approaches import Approach
 from jaxbridge.learn.setup import Setup
-from jaxbridge.run.memory import check_evaluation, check_model_evaluation
+from jaxbridge.run.memory import check_evaluation, model_batches_fit
 from jaxbridge.run.model_repair import load_models, planned_with
 from jaxbridge.run.runner import load_learners
 from jaxbridge.utils.progress import SlowWork
@@ -182,7 +182,7 @@ def policy_tasks(policy: TrainedPolicy, sized_specs=None, num_tasks: int = 10, m
                            progress=SlowWork(f"{env_cls.name}: {'sized' if sized else 'given'} tasks and plan tables"))
     planned = policy.planned(dataclasses.replace(batch, env=batch.env.with_quirks(config.env_quirks)))
     if policy.models is not None:
-        check_model_evaluation(planned, max_memory)
+        model_batches_fit(planned, max_memory)
     return planned
 
 

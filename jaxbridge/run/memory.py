@@ -91,30 +91,15 @@ def totals(count: int, each: int, limit: int) -> tuple[int, int]:
     return RUNTIME_BYTES + count * each, max(0, (limit - RUNTIME_BYTES) // each)
 
 
-def model_batch_bytes(batch: TaskBatch) -> int:
-    """About what a batch planned with learned models holds at its peak while it runs."""
-    return MODEL_TABLE_COPIES * tree_bytes(batch.arrays)
-
-
-def check_model_evaluation(batch: TaskBatch, limit: int | None = None) -> int:
-    """The estimate for running a batch planned with learned models; TooBig if it exceeds `limit` bytes."""
+def model_batches_fit(batch: TaskBatch, limit: int | None = None, lower: str = "--num-tasks") -> int:
+    """How many batches like `batch`, planned with learned models, fit at once within `limit` bytes
+    (default: what is available), at MODEL_TABLE_COPIES times their bytes each; TooBig, naming the flag
+    `lower` to lower, if not even `batch` does."""
     limit, what = limit_bytes(limit)
-    need = RUNTIME_BYTES + model_batch_bytes(batch)
-    if need > limit:
-        raise TooBig(f"evaluating these {len(batch.specs)} tasks with their learned models needs about {need / 2**30:.1f} "
-                     f"GiB, more than the {limit / 2**30:.1f} GiB {what}; lower --num-tasks or raise --max-memory")
-    return need
-
-
-def model_seeds_fit(one_seed: TaskBatch, limit: int | None = None) -> int:
-    """How many seeds' tasks, planned with their learned models, one evaluation batch holds within `limit`
-    bytes (default: what is available), from one seed's planned batch; TooBig if not even one seed's."""
-    limit, what = limit_bytes(limit)
-    need, fit = totals(1, model_batch_bytes(one_seed), limit)
+    need, fit = totals(1, MODEL_TABLE_COPIES * tree_bytes(batch.arrays), limit)
     if fit < 1:
-        raise TooBig(f"evaluating one seed's {len(one_seed.specs)} tasks with its learned model needs about "
-                     f"{need / 2**30:.1f} GiB, more than the {limit / 2**30:.1f} GiB {what}; draw fewer tasks "
-                     f"(--sweep-tasks) or raise --max-memory")
+        raise TooBig(f"evaluating these {len(batch.specs)} tasks with their learned models needs about {need / 2**30:.1f} "
+                     f"GiB, more than the {limit / 2**30:.1f} GiB {what}; lower {lower} or raise --max-memory")
     return fit
 
 

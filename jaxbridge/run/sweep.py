@@ -18,7 +18,7 @@ import numpy as np
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.tasks import TaskBatch, make_batch
 from jaxbridge.run.evaluate import TrainedPolicy
-from jaxbridge.run.memory import model_seeds_fit
+from jaxbridge.run.memory import model_batches_fit
 from jaxbridge.utils import stats
 
 
@@ -93,7 +93,7 @@ def seed_groups(policy: TrainedPolicy, env_cls: type[NoveltyEnv], specs: list, s
     models (tables per seed, sized from its first seed's planned batch): then as many as fit."""
     if policy.models is None:
         return [seeds]
-    size = model_seeds_fit(policy.planned(sweep_batch(env_cls, specs, seeds[:1])), max_memory)
+    size = model_batches_fit(policy.planned(sweep_batch(env_cls, specs, seeds[:1])), max_memory, "--sweep-tasks")
     return [seeds[i:i + size] for i in range(0, len(seeds), size)]
 
 
