@@ -34,18 +34,18 @@ class GateRow:
         LiftedOperator("PushGate", (("?robot", "robot"), ("?gate", "gate")), (), (), (), "PushGate", "?gate")))
 
 
-def _view(cell: int, gate_open: bool, weight: float) -> View:
+def _view(cell: int, gate_open: bool, weight: float, gate_x: float = GATE_CELL + 0.5) -> View:
     names = ("robby", *(f"cell{i}" for i in range(CELLS)), "gate0")
     features = np.zeros((len(names), 2), np.float32)
     features[-1] = (gate_open, weight)
     position = np.zeros((len(names), 3), np.float32)
-    position[:, 0] = [cell + 0.5, *(np.arange(CELLS) + 0.5), GATE_CELL + 0.5]
+    position[:, 0] = [cell + 0.5, *(np.arange(CELLS) + 0.5), gate_x]
     adjacent = {("Adjacent", f"cell{i}", f"cell{j}") for i in range(CELLS) for j in (i - 1, i + 1) if 0 <= j < CELLS}
     return View(names, ("robot",) + ("cell",) * CELLS + ("gate",), features, position,
                 frozenset({("RobotInCell", "robby", f"cell{cell}")} | adjacent))
 
 
-def _gate_row_segments(rng: np.random.Generator, calls: int = 300) -> list[Segment]:
+def _gate_row_segments(rng: np.random.Generator, calls: int = 300, _view=_view) -> list[Segment]:
     segments = []
     for _ in range(calls):
         cell, gate_open, weight = int(rng.integers(CELLS)), bool(rng.random() < 0.3), float(rng.uniform(0.2, 0.8))
@@ -84,6 +84,36 @@ def test_the_gate_rows_model_plans_past_a_closed_gate_and_its_pddl_reads_back():
     read = read_domain(model.pddl())
     assert {op.name: (set(op.pre), set(op.add), set(op.delete), op.skill, op.slot_param) for op in read.operators} == \
         {op.name: (set(op.pre), set(op.add), set(op.delete), op.skill, op.slot_param) for op in model.domain.operators}
+
+
+class EdgeGateRow(GateRow):
+    """GateRow with its gate at its cell's right edge, where no cell is, and two more atoms of the model's:
+    the static GateInCell and Facing(robot, gate), which holds while the robot is in the gate's cell and
+    which the model's FaceGate makes from anywhere (as Doorknobs' model lets a robot step from doorway to
+    doorway past a closed door)."""
+
+    skills = GateRow.skills + (SkillSpec("FaceGate"),)
+    domain = Domain("edge-gate-row", GateRow.domain.types,
+                    GateRow.domain.predicates | {"GateInCell": ("gate", "cell"), "Facing": ("robot", "gate")},
+                    GateRow.domain.operators + (LiftedOperator("FaceGate", (("?robot", "robot"), ("?gate", "gate")), (),
+                                                               (("Facing", "?robot", "?gate"),), (), "FaceGate", "?gate"),))
+
+
+def _edge_view(cell: int, gate_open: bool, weight: float, facing: bool | None = None) -> View:
+    view = _view(cell, gate_open, weight, gate_x=GATE_CELL + 0.95)
+    facing = cell == GATE_CELL if facing is None else facing
+    given = view.given | {("GateInCell", "gate0", f"cell{GATE_CELL}")} | ({("Facing", "robby", "gate0")} if facing else set())
+    return View(view.names, view.types, view.features, view.position, given)
+
+
+def test_a_learned_push_needs_the_gate_it_faces_in_the_cell_it_stands_in_as_the_model_relates_the_robots_places():
+    model = learn_model(EdgeGateRow, _gate_row_segments(np.random.default_rng(0), _view=_edge_view))
+    (push,) = [op for op in model.domain.operators if op.skill == "PushGate"]
+    variables = dict((t, v) for v, t in push.params)
+    assert ("GateInCell", variables["gate"], variables["cell"]) in push.pre
+    # facing the gate from cell 0 (the model's FaceGate allows it): walk into its cell first, then push
+    found = plan(model, _edge_view(0, False, 0.5, facing=True), frozenset({("gate_open", "gate0")}))
+    assert [(op.skill, op.slot_object) for op in found] == [("MoveRobot", f"cell{GATE_CELL}"), ("PushGate", "gate0")]
 
 
 DIAL_WINDOW = 0.1

@@ -114,6 +114,12 @@ class Cluster:
     befores: list[frozenset[Atom]] = field(default_factory=list)  # lifted
     segments: list[tuple[Segment, dict[str, str]]] = field(default_factory=list)  # the call, variable -> object
 
+    @property
+    def robot(self) -> str | None:
+        """The robot's variable (the first object of the calls' views), None where the effects leave it out."""
+        segment, found = self.segments[0]
+        return next((v for v, o in found.items() if o == segment.before.names[0]), None)
+
     def match(self, skill: str, types: dict[str, str], add, delete, slot_object) -> dict[str, str] | None:
         """variable -> object making the call's effects this cluster's, or None."""
         if skill != self.skill or sorted(types.values()) != sorted(t for _, t in self.params):
@@ -164,8 +170,9 @@ def new_operator(cluster: Cluster, index: int, failures: list[frozenset[Atom]], 
                  model_fluents: frozenset[str]) -> LiftedOperator:
     """The cluster's operator (see the module): `failures` are the atoms before each effectless call of the
     skill, lifted with its object as the slot variable; `model_fluents` the planner model's fluent
-    predicates. The model's static atoms that held before every call are kept only to bind a variable
-    nothing else relates to the others: the training tasks' one layout makes many of them hold by chance."""
+    predicates. The model's static atoms that held before every call are kept where they relate the robot's
+    places (the objects of its atoms), and otherwise only to bind a variable nothing else relates to the
+    others: the training tasks' one layout makes many of them hold by chance."""
     always = frozenset.intersection(*cluster.befores)
     slot = cluster.params[0][0] if cluster.segments[0][0].slot_object else None
 
@@ -181,7 +188,12 @@ def new_operator(cluster: Cluster, index: int, failures: list[frozenset[Atom]], 
         return atom[1:] == (slot,) and any(atom not in failed for failed in failures)  # a failure lacked it
 
     pre = [a for a in sorted(always) if needed(a)]
-    pre += _binding(sorted(a for a in always if grammar.kind(a[0]) == 0 and a[0] not in model_fluents), pre, cluster.params)
+    static = sorted(a for a in always if grammar.kind(a[0]) == 0 and a[0] not in model_fluents)
+    # How the robot's places relate holds wherever it stands (the doorway's door is in the robot's room): kept,
+    # though the robot's atoms already relate its places to each other
+    where = {x for a in pre if a[0] in model_fluents and cluster.robot in a[1:] for x in a[1:]} - {cluster.robot}
+    pre += [a for a in static if len(a) > 2 and set(a[1:]) <= where]
+    pre += _binding(static, pre, cluster.params)
     return LiftedOperator(f"{cluster.skill}_{index}", cluster.params, tuple(sorted(pre)), tuple(sorted(cluster.add)),
                           tuple(sorted(cluster.delete)), cluster.skill, slot)
 
