@@ -57,7 +57,7 @@ def main() -> None:
     config, changes = swept_config(args)
     print(f"{config.env}, seeds {config.seeds[0]}-{config.seeds[-1]}, overrides {changes or 'none'}")
     setup = make_setup(config)
-    seeds = SeedMesh(config.num_seeds, tuple(select_devices("auto")), config.seed_block)
+    seeds = SeedMesh(config.num_seeds, tuple(select_devices()), config.seed_block)
     learners, cycle = seeds.place(setup.init_learners()), Cycle(setup, seeds)
     for c in range(1, at[-1] + 1):
         learners, _ = cycle(learners)

@@ -30,7 +30,7 @@ def train_seeds(config: TrainConfig) -> tuple[Setup, object, np.ndarray]:
     """Train every seed of `config` over every device (as train.py; results do not depend on it), without
     run files. Returns the setup, the final learners (one device) and the test solve rates
     float[seeds, cycles]."""
-    run = measure_cycles(config, select_devices("auto"))
+    run = measure_cycles(config, select_devices())
     return run["setup"], run["seeds"].unpad(run["learners"]), run["seed_rates"]
 
 

@@ -25,6 +25,7 @@ from jaxbridge.learn.devices import SeedMesh, describe, device_count_arg, select
 from jaxbridge.learn.online import Cycle
 from jaxbridge.learn.setup import make_setup
 from jaxbridge.run.model_repair import ModelRepair
+from jaxbridge.utils import compile_cache
 
 AUTHORS_WHOLE_RUN_S = authors_seed_run_s()  # one seed-run of the authors' "ours" (docs/results/authors_times.csv)
 
@@ -42,20 +43,23 @@ class TimedTraining:
         # a model repair approach's relearning between cycles is part of its cycles' time, as in train.py
         self.repair = ModelRepair(self.setup, config.num_seeds) if self.setup.approach.repairs_model else None
         self.build_s = time.perf_counter() - start
-        self.times, self.seed_rates = [], []
+        self.times, self.built, self.seed_rates = [], [], []
 
     def step(self) -> None:
         t0 = time.perf_counter()
-        self.learners, metrics = self.cycle(self.learners)
-        if self.repair is not None:
-            self.repair.after_cycle(len(self.times) + 1, self.cycle)
+        with compile_cache.record() as built:
+            self.learners, metrics = self.cycle(self.learners)
+            if self.repair is not None:
+                self.repair.after_cycle(len(self.times) + 1, self.cycle)
         self.seed_rates.append(np.asarray(self.seeds.unpad(metrics).test_solve_rate))
         self.times.append(time.perf_counter() - t0)
+        self.built.append((built.fresh, built.seconds))
 
     def result(self) -> dict:
-        """The times (build, each cycle, their total), each cycle's mean test solve rate ("rates") and per
-        seed ("seed_rates", float[seeds, cycles]), and the setup, seed layout and learners."""
-        return {"build_s": self.build_s, "times": self.times, "total_s": self.build_s + sum(self.times),
+        """The times (build, each cycle, their total), each cycle's programs compiled and seconds spent
+        building programs ("built"), each cycle's mean test solve rate ("rates") and per seed ("seed_rates",
+        float[seeds, cycles]), and the setup, seed layout and learners."""
+        return {"build_s": self.build_s, "times": self.times, "built": self.built, "total_s": self.build_s + sum(self.times),
                 "rates": [float(r.mean()) for r in self.seed_rates], "seed_rates": np.array(self.seed_rates).T,
                 "setup": self.setup, "seeds": self.seeds, "learners": self.learners, "cycle": self.cycle}
 
@@ -64,8 +68,6 @@ def measure_cycles(config: TrainConfig, devices: list, cycles: int | None = None
     """Build `config`'s setup with the seeds over `devices` and run `cycles` cycles (default:
     config.cycles). Returns TimedTraining.result() with what JAX compiled in the first cycle ("first")
     and in the later ones ("later"; jaxbridge.utils.compile_cache.CompileEvents)."""
-    from jaxbridge.utils import compile_cache
-
     run = TimedTraining(config, devices)
     with compile_cache.record() as first:
         run.step()
@@ -113,23 +115,27 @@ def with_overrides(config: TrainConfig, overrides: list[tuple[str, object]]) -> 
     return dataclasses.replace(config, **changes), changes
 
 
-def report(config: TrainConfig, run: dict) -> tuple[float, float]:
-    """Print one approach's times; returns its steady-state (median) and mean seconds per cycle after the
-    first (a model repair approach's relearning cycles are in the mean, not the median)."""
+def report(config: TrainConfig, run: dict) -> tuple[float, float, float]:
+    """Print one approach's times; returns its steady-state (median), mean, and mean less building programs
+    seconds per cycle after the first (a model repair approach's relearning cycles are in the means, not the
+    median; the cycle it first plans with learned tables compiles its program again)."""
     times, total = run["times"], run["total_s"]
-    steady = float(np.median(times[1:])) if len(times) > 1 else times[0]
-    mean = float(np.mean(times[1:])) if len(times) > 1 else times[0]
+    later = times[1:] or times
+    built = run["built"][1:] or run["built"]
+    steady, mean = float(np.median(later)), float(np.mean(later))
+    unbuilt = mean - sum(seconds for _, seconds in built) / len(later)
     per_seed_run = total / config.num_seeds
     print(f"{config.env}, {config.approach}: {config.num_seeds} seeds x {config.cycles} cycles, {config.learner.updates_per_cycle} updates/cycle, "
           f"batch {config.learner.batch_size}")
     print(f"tasks + plan tables: {run['build_s']:.1f} s; first cycle (with compilation): {times[0]:.1f} s; "
-          f"steady state: {steady:.3f} s/cycle, mean {mean:.3f} s/cycle")
+          f"steady state: {steady:.3f} s/cycle, mean {mean:.3f} s/cycle; later cycles built "
+          f"{sum(n for n, _ in built)} program(s) in {sum(s for _, s in built):.1f} s, mean without them {unbuilt:.3f} s/cycle")
     print(f"total: {total:.1f} s; final mean test solve rate {run['rates'][-1]:.2f}")
     if config.env in AUTHORS_WHOLE_RUN_S:
         authors = AUTHORS_WHOLE_RUN_S[config.env]
         print(f"authors: {authors:,} s per seed-run; ours: {per_seed_run:.1f} s per seed-run "
               f"-> {authors / per_seed_run:,.0f}x")
-    return steady, mean
+    return steady, mean, unbuilt
 
 
 def main() -> None:
@@ -148,9 +154,9 @@ def main() -> None:
     runs = measure_interleaved(configs, seeds_over, args.cycles)
     seconds = {approach: report(configs[approach], run) for approach, run in runs.items()}
     first = next(iter(seconds))
-    for approach, (steady, mean) in list(seconds.items())[1:]:
+    for approach, (steady, mean, unbuilt) in list(seconds.items())[1:]:
         print(f"{approach}: {steady / seconds[first][0]:.2f}x {first}'s steady-state seconds per cycle, "
-              f"{mean / seconds[first][1]:.2f}x its mean")
+              f"{mean / seconds[first][1]:.2f}x its mean, {unbuilt / seconds[first][2]:.2f}x its mean without building programs")
 
 
 if __name__ == "__main__":

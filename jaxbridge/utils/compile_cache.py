@@ -124,6 +124,11 @@ class CompileEvents:
         return sorted(self.programs, key=lambda p: -p[1])[:n]
 
     @property
+    def seconds(self) -> float:
+        """Tracing, lowering and XLA compiling: the seconds spent building programs."""
+        return self.trace_s + self.lower_s + self.compile_s
+
+    @property
     def fresh(self) -> int:
         """Programs compiled by XLA (not loaded from the persistent cache)."""
         return self.compiles - self.cache_hits
