@@ -2,7 +2,7 @@
 with h_ff over helpful actions (search.py).
 
 A `ModelPlanner` serves one episode: the objects and the atoms no operator changes rarely change within
-one, so each grounding (0.25 s on a 7x7 Doorknobs map, 10,000 ground operators) is built once per set of
+one, so each grounding (0.1-0.4 s on a 7x7 Doorknobs map, about 1,600 ground operators) is built once per set of
 static atoms and kept for every replan.
 """
 from __future__ import annotations
