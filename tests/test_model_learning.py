@@ -12,6 +12,7 @@ from envs_jax.multi_novelty import MultiNovelty
 from envs_jax.multi_novelty.tasks import BOTH, task_of
 from jaxbridge.learn.model.model import learn_model
 from jaxbridge.learn.model.planning import plan
+from jaxbridge.learn.model.samplers import Sampler
 from jaxbridge.learn.model.segments import Segment, View
 from planner import Domain, LiftedOperator, read_domain
 
@@ -114,6 +115,15 @@ def test_a_learned_push_needs_the_gate_it_faces_in_the_cell_it_stands_in_as_the_
     # facing the gate from cell 0 (the model's FaceGate allows it): walk into its cell first, then push
     found = plan(model, _edge_view(0, False, 0.5, facing=True), frozenset({("gate_open", "gate0")}))
     assert [(op.skill, op.slot_object) for op in found] == [("MoveRobot", f"cell{GATE_CELL}"), ("PushGate", "gate0")]
+
+
+def test_a_sampler_with_no_link_to_its_slot_reads_the_object_its_ground_operator_names():
+    # a robot-slot skill whose parameter follows a gate's first feature: of two gates, the operator's own
+    sampler = Sampler((1.0, 0.0, 0.0), 0.0, 1.0, input_type="gate")
+    view = View(("robby", "gate0", "gate1"), ("robot", "gate", "gate"), np.array([[0, 0], [0.2, 0], [0.7, 0]], np.float32),
+                np.zeros((3, 3), np.float32), frozenset())
+    assert sampler.input_object(view, "robby", ("robby", "gate1")) == "gate1"
+    assert sampler(view, "robby", ("robby", "gate1")) == pytest.approx(0.7)
 
 
 DIAL_WINDOW = 0.1

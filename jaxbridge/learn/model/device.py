@@ -153,7 +153,7 @@ class LearnedPlanner:
         task = self.task
         lifted = [o.name for o in task.model.domain.operators].index(op.name)
         sampler, names = task.model.samplers.get(op.name), task.view.names
-        source = sampler.input_object(task.view, op.slot_object) if sampler else op.slot_object
+        source = sampler.input_object(task.view, op.slot_object, op.args) if sampler else op.slot_object
         slot = task.env.object_slot(op.slot_object) if op.slot_object else 0
         assert 0 <= slot < task.env.num_objects, f"{op}: slot {slot} outside the env's {task.env.num_objects}"
         return learned_code(lifted, names.index(source) if source in names else 0, slot, len(names), task.env.num_objects)

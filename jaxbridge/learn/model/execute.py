@@ -61,7 +61,7 @@ def run_planner_alone(env: NoveltyEnv, model: LearnedModel, spec, horizon: int |
         expected = (atoms - op.delete) | op.add
         spec_of = env.skills[env.skill_index(op.skill)]
         sampler = model.samplers.get(op.name)
-        param = sampler(view, op.slot_object) if sampler else (spec_of.param_low + spec_of.param_high) / 2
+        param = sampler(view, op.slot_object, op.args) if sampler else (spec_of.param_low + spec_of.param_high) / 2
         slot = env.object_slot(op.slot_object) if op.slot_object else 0
         call = SkillCall(jnp.int32(env.skill_index(op.skill)), jnp.int32(slot), jnp.float32(param), jnp.bool_(True), jnp.int32(0))
         state, taken, changed = _run_skill(env, state, call, jnp.int32(horizon - steps))
