@@ -1,6 +1,6 @@
 """Samplers: a learned operator's continuous parameter as a linear function of its acted-on object's
-features (the slot object's, or the object whose literals its effects change, found from the slot object
-through the relations its preconditions state), fitted by least squares on the quickest of the calls that had the operator's effect (a push's
+features (the slot object's, or the object whose literals its effects change, found among the ground
+operator's objects through the relations its preconditions state to the slot object), fitted by least squares on the quickest of the calls that had the operator's effect (a push's
 force follows the door's stiffness; a twist that turns a jug in one wrist step leaves more of the horizon
 than one that takes two); a skill whose bounds are equal keeps its constant."""
 from __future__ import annotations
