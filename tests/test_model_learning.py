@@ -74,8 +74,9 @@ def test_the_learner_recovers_a_gates_precondition_its_opening_operator_and_its_
     gate, cell, robot = variables["gate"], variables["cell"], variables["robot"]
     assert {("gate_not_open", gate), ("RobotInCell", robot, cell), ("same_place_cell_gate", cell, gate)} <= set(push.pre)
     assert {("gate_open", gate), ("cell_all_gate_open", cell)} <= set(push.add) and ("gate_not_open", gate) in push.delete
+    args = ("gate0", f"cell{GATE_CELL}", "robby")
     for weight in (0.3, 0.5, 0.7):  # the push follows the gate's weight, inside the opening window
-        assert abs(model.samplers[push.name](_view(GATE_CELL, False, weight), "gate0") - weight) < PUSH_WINDOW / 2
+        assert abs(model.samplers[push.name](_view(GATE_CELL, False, weight), "gate0", args) - weight) < PUSH_WINDOW / 2
 
 
 def test_the_gate_rows_model_plans_past_a_closed_gate_and_its_pddl_reads_back():
@@ -194,7 +195,7 @@ def test_turning_the_dial_a_skill_the_model_knows_learns_the_effect_a_move_needs
     assert [op.skill for op in found] == ["MoveRobot", "TurnDial", "MoveRobot", "MoveRobot"]
     sampler = dial_row_model.samplers[found[1].name]
     for target in (0.35, 0.5, 0.65):  # the turn follows the gate's target
-        assert abs(sampler(_dial_view(GATE_CELL, 0.0, target, False), "gate0") - target) < DIAL_WINDOW / 2
+        assert abs(sampler(_dial_view(GATE_CELL, 0.0, target, False), "gate0", found[1].args) - target) < DIAL_WINDOW / 2
 
 
 @pytest.fixture(scope="module")

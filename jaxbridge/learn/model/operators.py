@@ -191,7 +191,8 @@ def new_operator(cluster: Cluster, index: int, failures: list[frozenset[Atom]], 
     static = sorted(a for a in always if grammar.kind(a[0]) == 0 and a[0] not in model_fluents)
     # How the robot's places relate holds wherever it stands (the doorway's door is in the robot's room): kept,
     # though the robot's atoms already relate its places to each other
-    where = {x for a in pre if a[0] in model_fluents and cluster.robot in a[1:] for x in a[1:]} - {cluster.robot}
+    robot = cluster.robot
+    where = {x for a in pre if a[0] in model_fluents and robot in a[1:] for x in a[1:]} - {robot}
     pre += [a for a in static if len(a) > 2 and set(a[1:]) <= where]
     pre += _binding(static, pre, cluster.params)
     return LiftedOperator(f"{cluster.skill}_{index}", cluster.params, tuple(sorted(pre)), tuple(sorted(cluster.add)),

@@ -21,11 +21,11 @@ class Sampler:
     input_type: str | None = None  # the input object's type, where it is not the slot object
     links: tuple[tuple[SamePlace | Before, bool], ...] = ()  # relations tying it to the slot object (slot first?)
 
-    def input_object(self, view: View, slot_object: str | None, args: tuple[str, ...] | None = None) -> str | None:
+    def input_object(self, view: View, slot_object: str | None, args: tuple[str, ...]) -> str | None:
         """The object the parameter follows: the slot object, or the first of the input type that every
         link ties to it (a key's door at the cell the skill's slot names) among the ground operator's `args`
-        (where given: with no link, every object of the type is tied, and the door a robot opens is its
-        operator's, not the view's first)."""
+        (with no link every object of the type is tied: the door a robot opens is its operator's, not the
+        view's first)."""
         if self.input_type is None:
             return slot_object
         at = lambda name: view.position[view.names.index(name)][None]
@@ -33,9 +33,9 @@ class Sampler:
                                 rel.holds(*((at(slot_object), at(name)) if first else (at(name), at(slot_object))))[0, 0]
                                 for rel, first in self.links)
         return next((n for n, t in zip(view.names, view.types)
-                     if n is not None and t == self.input_type and (args is None or n in args) and tied(n)), None)
+                     if n in args and t == self.input_type and tied(n)), None)
 
-    def __call__(self, view: View, slot_object: str | None, args: tuple[str, ...] | None = None) -> float:
+    def __call__(self, view: View, slot_object: str | None, args: tuple[str, ...]) -> float:
         inputs = _inputs(view, self.input_object(view, slot_object, args))
         return float(np.clip(np.dot(inputs, self.weights), self.low, self.high))
 
