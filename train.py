@@ -40,6 +40,8 @@ EXIT_NUMERICAL, EXIT_CANNOT_WRITE = 3, 4
 DEFAULTS = jaxbridge.TrainConfig()
 # The default learner's settings that have a flag of their own; the others, and other learners': --set.
 LEARNER_FLAGS = ("updates_per_cycle", "batch_size")
+# The config's fields without a flag of their own: --approaches names them; the token network's settings: --set.
+NO_FLAG = ("approach", "tokens")
 # The flags that set the run's config, named as their settings; --resume takes the saved config instead.
 SETTINGS = {field.name for field in dataclasses.fields(jaxbridge.TrainConfig)} | set(LEARNER_FLAGS)
 
@@ -107,7 +109,7 @@ def add_setting_flags(p) -> None:
                                            "(help(jaxbridge.TrainConfig));\n  one not given takes the preset's value "
                                            "for the env, else the default shown.\n  envs: " + ", ".join(jaxbridge.env_names())
                                            + "\n  presets: " + "; ".join(f"{k}: {v}" for k, v in jaxbridge.PRESETS.items()))
-    add_field_flags(run, jaxbridge.TrainConfig, skip=("approach",))  # approach: --approaches
+    add_field_flags(run, jaxbridge.TrainConfig, skip=NO_FLAG)
     add_field_flags(p.add_argument_group(f"settings of learner {d.learner.name} with flags (the others, and other "
                                          "learners': --set, listed below)"), type(d.learner), only=LEARNER_FLAGS)
 

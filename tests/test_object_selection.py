@@ -11,12 +11,13 @@ import pytest
 from envs_jax import env_class
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.observations import object_tokens, robot_features, token_slots, token_width
-from jaxbridge.learn.dqn import q_network
+from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.object_q import attention
 from jaxbridge.learn.q_bridge import encode
 from run_helpers import cli_in_process, train
 
 ENV = env_class("light_switch_door")
+SELECTOR = get_approach("ours_learned_selection")
 
 
 def lsd_state(cells: int, doors: tuple[int, ...], robot_x: float):
@@ -35,7 +36,7 @@ def lsd(cells: int, doors: tuple[int, ...], robot_cell: int, stuck_cell: int | N
 
 
 def network(env, **settings):
-    net = q_network(TrainConfig(approach="ours_learned_selection", **settings), env)
+    net = SELECTOR.q_network(TrainConfig(approach="ours_learned_selection", **settings), env)
 
     width = len(token_slots(env)) * token_width(env)
     x = encode(env, jnp.zeros(width), jnp.int32(0), jnp.float32(0.5))
@@ -182,7 +183,7 @@ def test_distance_ranks_order_only_what_a_skill_can_act_on():
 
 def test_an_ensemble_is_members_of_their_own_whose_minimum_is_the_value():
     env, tokens = lsd(6, (1, 3), robot_cell=3)
-    net = q_network(TrainConfig(approach="ours_learned_selection", q_ensemble=2, output_init="uniform"), env)
+    net = SELECTOR.q_network(TrainConfig(approach="ours_learned_selection", q_ensemble=2, output_init="uniform"), env)
     x = encode(env, tokens, jnp.arange(env.num_skills + 1), jnp.full(env.num_skills + 1, 0.5))
     params = net.init(jax.random.key(0), x)
     members = np.asarray(net.apply(params, x, members=True))
@@ -193,7 +194,7 @@ def test_an_ensemble_is_members_of_their_own_whose_minimum_is_the_value():
 
 def test_the_approach_refuses_what_its_network_does_not_have():
     with pytest.raises(ValueError, match="does not scale its object tokens: no normalise"):
-        q_network(TrainConfig(approach="ours_learned_selection", normalise="minmax"), ENV())
+        SELECTOR.q_network(TrainConfig(approach="ours_learned_selection", normalise="minmax"), ENV())
 
 
 def test_the_learned_selector_trains_from_the_command_line_and_reports_what_it_looks_at(tmp_path):

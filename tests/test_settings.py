@@ -36,6 +36,19 @@ def test_a_learners_settings_are_set_and_read_by_name_and_saved_nested():
         TrainConfig(learner="pqn", q_lambda=-1.0)
 
 
+def test_the_token_networks_settings_are_the_configs_own_whatever_the_learner_and_older_configs_move_them_there():
+    config = TrainConfig(learner="pqn", attention_preference=4.0, attention_distance="now")
+    assert (config.tokens.attention_preference, config.tokens.attention_distance) == (4.0, "now")
+    assert not hasattr(config.learner, "attention_preference")  # a learner's settings hold no network's part
+    assert grid.parse_sweeps(["attention_preference=1,3"], config) == {"attention_preference": (1.0, 3.0)}
+    saved = json.loads(json.dumps(config.to_dict()))
+    v15 = {k: v for k, v in saved.items() if k != "tokens"}
+    v15.update(config_version=15, learner={**saved["learner"], **saved["tokens"]})
+    assert TrainConfig.from_dict(v15) == config  # a version-15 learner held them
+    with pytest.raises(ValueError, match="tokens.bogus"):
+        TrainConfig.from_dict({**saved, "tokens": {"bogus": 1}})
+
+
 def test_a_preset_leaves_out_what_the_learner_lacks_and_the_hyper_leaves_are_the_leaf_settings():
     coffee = jaxbridge.make_config("coffee")  # its env defaults: updates_per_cycle 250 (double DQN's), step_gamma
     assert coffee.learner.updates_per_cycle == 250
@@ -81,6 +94,7 @@ def test_a_learner_registered_by_name_brings_its_settings():
 def flat(config: TrainConfig) -> dict:
     """`config` as a flat config.json of version 11 held it."""
     nested = config.to_dict()
+    nested.pop("tokens")  # the token network's settings came later still
     learner = {k: v for k, v in nested.pop("learner").items() if k != "name"}
     return {**nested, **learner, "learner": config.learner.name, "config_version": 11}
 
@@ -91,12 +105,14 @@ def test_every_older_config_version_loads_as_it_was_trained():
     loaded = TrainConfig.from_dict(v11)
     assert type(loaded.learner) is DQNSettings and loaded.learner.updates_per_cycle == 10 and loaded.learner.buffer_capacity == 256
     assert flat(loaded) == {**{k: v for k, v in v11.items() if k not in ("q_lambda", "pqn_epochs", "pqn_minibatches")},
-                            "count_bonus": 0.0, "keep_cycles": [], "attention_fixed_penalty": False,
-                            "attention_log_scale": False,  # added later: their defaults, what the run had
-                            "attention_distance": "now", "attention_preference": 4.0,  # not the defaults: what it had
-                            "attention_robot_features": True, "attention_kind_noise": True}
+                            "count_bonus": 0.0, "keep_cycles": []}  # added later: their defaults, what the run had
+    assert dataclasses.asdict(loaded.tokens) == {
+        "attention_fixed_penalty": False, "attention_log_scale": False,  # added later: what the run had
+        "attention_distance": "now", "attention_preference": 4.0,  # not the defaults: what it had
+        "attention_robot_features": True, "attention_kind_noise": True}
     pqn = TrainConfig(learner="pqn", q_lambda=0.3, pqn_epochs=8)
-    assert TrainConfig.from_dict({**flat(pqn), "batch_size": 64, "polyak_tau": 0.01}) == pqn  # DQN's fields dropped
+    older = TrainConfig.from_dict({**flat(pqn), "batch_size": 64, "polyak_tau": 0.01})
+    assert dataclasses.replace(older, tokens=pqn.tokens) == pqn  # DQN's fields dropped
     v1 = {k: v for k, v in v11.items() if k not in ("approach", "split_task_state", "learner", "q_lambda", "loop_guard")}
     old = TrainConfig.from_dict({**v1, "config_version": 1})
     assert (old.approach, old.learner.split_task_state, old.loop_guard, old.learner.name) == ("ours", False, False, "dqn")

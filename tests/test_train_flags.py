@@ -61,7 +61,7 @@ def test_a_value_out_of_its_declaration_is_a_one_line_flag_error(argv, message, 
 
 def flagged() -> list[tuple[type, dataclasses.Field]]:
     """The declared settings train.py has a generated flag for."""
-    own = [f for f in dataclasses.fields(TrainConfig) if f.name not in ("learner", "approach")]
+    own = [f for f in dataclasses.fields(TrainConfig) if f.name not in ("learner", *train.NO_FLAG)]
     return [(TrainConfig, f) for f in own] + [(DQNSettings, f) for f in dataclasses.fields(DQNSettings)
                                               if f.name in train.LEARNER_FLAGS]
 

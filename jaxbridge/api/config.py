@@ -9,6 +9,7 @@ from jaxbridge.core import grid, presets
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.learner_settings import LearnerSettings, settings_class
 from jaxbridge.core.settings import declared, described
+from jaxbridge.core.token_settings import TokenSettings
 from jaxbridge.utils.errors import InputError, refusing
 
 
@@ -51,7 +52,7 @@ def _over_preset(values: dict, **given) -> TrainConfig:
     (an env's double-DQN defaults do not apply to PQN); a given one is refused (ValueError). A learner given
     as settings is taken whole: the preset's values for it are left out."""
     learner = given.get("learner", values.get("learner", TrainConfig.learner.name))
-    kept = {f.name for f in dataclasses.fields(TrainConfig)}
+    kept = {f.name for f in (*dataclasses.fields(TrainConfig), *declared(TokenSettings))}
     if not isinstance(learner, LearnerSettings):
         kept |= {f.name for f in declared(settings_class(learner))}
     return TrainConfig(**{**{k: v for k, v in values.items() if k in kept}, **given})
@@ -71,12 +72,14 @@ def setting_values(texts: Sequence[str], config: TrainConfig) -> dict:
 
 def settings_help(learner: str | None = None, preset: str | None = None) -> str:
     """What train.py --help lists below its flags (the run's settings are flags there): the settings of
-    `learner` (default: the preset's learner, else double DQN), each with its default and its docstring
-    ("[leaf]": a sweep over it shares one compiled program)."""
+    `learner` (default: the preset's learner, else double DQN), then the object-token network's, each with
+    its default and its docstring ("[leaf]": a sweep over it shares one compiled program)."""
     name = learner or presets.preset_learner(preset) or TrainConfig.learner.name
     with refusing("learner"):
         cls = settings_class(name)
-    return f"settings of learner {name} (--set NAME=VALUE; --sweep NAME=V1,V2):\n" + described(cls, skip=("name",))
+    return (f"settings of learner {name} (--set NAME=VALUE; --sweep NAME=V1,V2):\n" + described(cls, skip=("name",))
+            + "\n\nsettings of the object-token network (the learned selector's; --set, --sweep):\n"
+            + described(TokenSettings))
 
 
 def _check_fits_env(config: TrainConfig, env_cls) -> None:

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 from jaxbridge.core.learner_settings import (DQNSettings, LearnerSettings, PQNSettings, named, settings_class)
 from jaxbridge.core.settings import Settings, declared, described, setting
+from jaxbridge.core.token_settings import TokenSettings
 
 # 2: `approach` (version 1 configs were all "ours" and still load); 3: `split_task_state` (older runs
 # stored whole observations and load with it off); 4: `preset`, `test_protocol`, `activation`,
@@ -25,8 +26,9 @@ from jaxbridge.core.settings import Settings, declared, described, setting
 # `keep_cycles` (older runs kept the latest two checkpoints alone); 14: `attention_robot_features` (older
 # learned selectors' Q-networks read the robot's own features), `attention_fixed_penalty`,
 # `attention_log_scale` (older ones had neither: their defaults); 15: `attention_kind_noise` (older learned
-# selectors' feature noise perturbed every token entry), `attention_fixed_penalty` on (older ones learned it)
-CONFIG_VERSION = 15
+# selectors' feature noise perturbed every token entry), `attention_fixed_penalty` on (older ones learned it);
+# 16: the `attention_*` settings under `tokens`, the object-token network's (older configs held them in `learner`)
+CONFIG_VERSION = 16
 NESTED_SINCE = 12
 
 
@@ -112,6 +114,10 @@ class TrainConfig(Settings):
     (docs/NEW_LEARNER.md; train.py --help --learner NAME lists its settings). Given as a name, it takes that
     learner's default settings; a learner's setting given by name to the config (`TrainConfig(batch_size=64)`)
     sets it in these, and is read here (`config.learner.batch_size`)."""
+    tokens: TokenSettings = setting(TokenSettings(), swept=False)
+    """The object-token Q-network's settings (core/token_settings.py), read by the approaches whose bridge sees
+    object tokens (the learned selector); each is given by its name (`TrainConfig(attention_preference=4)`,
+    `--set attention_preference=4`) and read here (`config.tokens.attention_preference`)."""
     checkpoint_every: int = setting(10, low=1, swept=False)
     """Save the learner state every this many cycles (and after the last one)."""
     keep_cycles: tuple[int, ...] = setting((), swept=False)
@@ -148,16 +154,12 @@ class TrainConfig(Settings):
             data = _nested(data)
         learner = dict(data.pop("learner"))
         settings = settings_class(learner["name"])
-        if version < 13 and "attention_distance" in _names(settings):
-            learner = {"attention_distance": "now", "attention_preference": 4.0, **learner}
-        if version < 14 and "attention_robot_features" in _names(settings):
-            learner = {"attention_robot_features": True, **learner}
-        if version < 15 and "attention_kind_noise" in _names(settings):
-            learner = {"attention_kind_noise": True, "attention_fixed_penalty": False, **learner}
-        unknown = (set(data) - set(_OWN)) | {f"learner.{k}" for k in set(learner) - set(_names(settings))}
+        tokens = data.pop("tokens", None) or _older_tokens(version, learner)
+        unknown = ((set(data) - set(_OWN)) | {f"learner.{k}" for k in set(learner) - set(_names(settings))}
+                   | {f"tokens.{k}" for k in set(tokens) - set(_names(TokenSettings))})
         if unknown:
             raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))}")
-        return cls(**_typed(cls, data), learner=settings(**_typed(settings, learner)))
+        return cls(**_typed(cls, data), learner=settings(**_typed(settings, learner)), tokens=TokenSettings(**tokens))
 
     def check_buffer_fits(self) -> None:
         """ValueError unless a cycle's training episodes fit a learner's replay buffer in one insert: the
@@ -198,6 +200,19 @@ def _typed(cls: type, data: dict) -> dict:
     return {k: tuple(v) if typing.get_origin(hints.get(k)) is tuple else v for k, v in data.items()}
 
 
+def _older_tokens(version: int, learner: dict) -> dict:
+    """The token network's settings of a config before version 16: those its learner held (taken out of
+    `learner`), over what the versions before each setting ran with."""
+    tokens = {name: learner.pop(name) for name in _names(TokenSettings) if name in learner}
+    if version < 13:
+        tokens = {"attention_distance": "now", "attention_preference": 4.0, **tokens}
+    if version < 14:
+        tokens = {"attention_robot_features": True, **tokens}
+    if version < 15:
+        tokens = {"attention_kind_noise": True, "attention_fixed_penalty": False, **tokens}
+    return tokens
+
+
 def _nested(flat: dict) -> dict:
     """A config from before learners had their own settings (a flat dict, `learner` a name or absent: double
     DQN) as a nested one: its learner's fields under `learner`; the fields only another built-in learner
@@ -209,38 +224,41 @@ def _nested(flat: dict) -> dict:
     return {**{k: v for k, v in flat.items() if k not in mine | flat_era | {"learner"}}, "learner": learner}
 
 
-def _with_learner(given: dict) -> dict:
-    """The keywords of `TrainConfig(...)` with the learner resolved: a name to its settings class (its
-    defaults), and a learner's setting given by name at the top level set in those settings."""
+def _with_sections(given: dict) -> dict:
+    """The keywords of `TrainConfig(...)` with its sections resolved: the learner's name to its settings class
+    (its defaults), and a setting of the learner or of the token network given by name at the top level
+    set in that section."""
     flat = {k: given.pop(k) for k in list(given) if k not in _OWN}
-    learner = given.get("learner", TrainConfig.learner)
+    learner, tokens = given.get("learner", TrainConfig.learner), given.get("tokens", TrainConfig.tokens)
     if isinstance(learner, str):
-        cls = settings_class(learner)
-        learner = cls(name=learner)
+        learner = settings_class(learner)(name=learner)
+    of_tokens = {k: flat.pop(k) for k in list(flat) if k in _names(TokenSettings)}
     unknown = set(flat) - set(_names(type(learner)))
     if unknown:
         raise ValueError(f"unknown config fields: {', '.join(sorted(unknown))} (not TrainConfig's, nor learner "
-                         f"{learner.name or type(learner).__name__}'s)")
-    return {**given, "learner": named(dataclasses.replace(learner, **flat) if flat else learner)}
+                         f"{learner.name or type(learner).__name__}'s, nor the token network's)")
+    return {**given, "learner": named(dataclasses.replace(learner, **flat) if flat else learner),
+            "tokens": dataclasses.replace(tokens, **of_tokens) if of_tokens else tokens}
 
 
-def _accepting_learner_names(cls: type) -> type:
+def _accepting_section_names(cls: type) -> type:
     """Wrap the generated __init__ so that `TrainConfig(...)` and `dataclasses.replace(config, ...)` take
-    the learner by name and its settings by their names (see `_with_learner`)."""
+    the learner by name and its sections' settings by their names (see `_with_sections`)."""
     generated = cls.__init__
 
     def __init__(self, **given):
-        generated(self, **_with_learner(given))
+        generated(self, **_with_sections(given))
 
     __init__.__doc__ = generated.__doc__
     cls.__init__ = __init__
     return cls
 
 
-_accepting_learner_names(TrainConfig)
+_accepting_section_names(TrainConfig)
 TrainConfig.__doc__ = (
     "A training run's settings (frozen): `jaxbridge.make_config(env, preset=..., **overrides)` resolves an env's "
     "and a preset's values, checked.\nEach field, its default, and where the paper or the authors' code differ ([leaf]: a sweep "
-    "over it shares one compiled program):\n\n" + described(TrainConfig, skip=("learner",))
+    "over it shares one compiled program):\n\n" + described(TrainConfig, skip=("learner", "tokens"))
     + "\n\nlearner: the learner's settings, `config.learner`; double DQN's by default (PQN's: "
-    "help(jaxbridge.core.learner_settings.PQNSettings)):\n\n" + described(DQNSettings))
+    "help(jaxbridge.core.learner_settings.PQNSettings)):\n\n" + described(DQNSettings)
+    + "\n\ntokens: the object-token network's settings, `config.tokens`:\n\n" + described(TokenSettings))

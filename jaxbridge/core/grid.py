@@ -1,7 +1,7 @@
 """Hyperparameter grids: `train.py --sweep key=v1,v2 --sweep key2=...` as the settings of one experiment.
 
-A setting is a set of config overrides (one value per swept key: a TrainConfig field or one of its
-learner's, by name); the grid is their cartesian product, in the order the keys and values were given.
+A setting is a set of config overrides (one value per swept key: a TrainConfig field, or one of its
+learner's or its token network's, by name); the grid is their cartesian product, in the order the keys and values were given.
 Settings that differ only in leaf hyperparameters (`setting(..., leaf=True)`, core/settings.py) share one
 compiled program; any other key (n_sample, widths, updates per cycle, ...) makes programs of its own
 (`program_groups`).
@@ -15,16 +15,21 @@ from jaxbridge.core import settings as declared
 from jaxbridge.core.config import TrainConfig
 
 
+def sections(config: TrainConfig) -> tuple[type, ...]:
+    """The settings classes whose fields set `config` by name: TrainConfig's, its learner's, its token network's."""
+    return TrainConfig, type(config.learner), type(config.tokens)
+
+
 def owner(config: TrainConfig, key: str) -> type | None:
-    """The settings class that declares `key` for `config`: TrainConfig or its learner's; None if neither."""
-    for cls in (TrainConfig, type(config.learner)):
+    """The settings class that declares `key` for `config` (one of its `sections`); None if none does."""
+    for cls in sections(config):
         if key in declared.fields_of(cls) and key != "name":
             return cls
     return None
 
 
 def sweepable(config: TrainConfig) -> list[str]:
-    return [name for cls in (TrainConfig, type(config.learner)) for name in declared.fields_of(cls)
+    return [name for cls in sections(config) for name in declared.fields_of(cls)
             if name != "name" and declared.is_swept(cls, name)]
 
 
@@ -34,7 +39,7 @@ def parse_value(key: str, text: str, config: TrainConfig | None = None):
     config = config or TrainConfig()
     cls = owner(config, key)
     if cls is None:
-        raise ValueError(f"{key}: not a setting of TrainConfig or of learner {config.learner.name}")
+        raise ValueError(f"{key}: not a setting of TrainConfig, of learner {config.learner.name} or of the token network")
     return declared.parse_value(cls, key, text)
 
 

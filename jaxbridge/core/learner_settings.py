@@ -42,11 +42,6 @@ class Normalise(enum.StrEnum):
     MINMAX = "minmax"
 
 
-class AttentionDistance(enum.StrEnum):
-    STALL = "stall"
-    NOW = "now"
-
-
 @dataclass(frozen=True)
 class LearnerSettings(Settings):
     name: str = setting("", swept=False)
@@ -77,33 +72,6 @@ class QSettings(LearnerSettings):
     ranges) or "minmax" (the authors'): every cycle, after relabelling, each input entry is shifted by
     its minimum over the replay buffer and divided by its range (at least 1), the targets likewise; the
     network fits the scaled targets and its output is scaled back. The target network shares the scaling."""
-    attention_distance: AttentionDistance = setting(AttentionDistance.STALL, choices=AttentionDistance)
-    """Learned selection only (object tokens, learn/object_q.py): the distance that attention's penalty reads,
-    each object's from the robot where it got stuck ("stall": chosen there, as the paper's rule chooses,
-    and kept through the fix) or from the robot now ("now": it may drift to an object the fix walks past)."""
-    attention_preference: float = setting(2.0, low=0, above=True)
-    """Learned selection only: how far, in logits, what an object is may move attention against its
-    distance (a tanh bound). Learned on a training task's few objects, a wider bound lets a preference
-    override nearness among a test task's many; a narrower one cannot pass over a nearer decoy
-    (docs/design/selection.md)."""
-    attention_robot_features: bool = False
-    """Learned selection only: the Q-network reads the robot's own features (Coffee's z, tilt, wrist and
-    fingers) beside its token's type and displacement since the stall. Off (ours): it reads what the paper's
-    rule gives, the chosen object and how far the robot has moved; attention's query reads the robot's
-    whole token either way. Chosen on development seeds (docs/design/selection.md)."""
-    attention_fixed_penalty: bool = True
-    """Learned selection only: attention's penalty per unit of distance stays at its start (16), so that a
-    preference passes over a nearer object only within its bound's reach (attention_preference / 16
-    squashed units). Off: the penalty is learned from there, and where it falls on the doors a preference
-    passes over the fix's door to the next. Chosen on development seeds (docs/design/selection.md)."""
-    attention_kind_noise: bool = False
-    """Learned selection only: `feature_noise` also perturbs each token's type one-hot and interactable flag.
-    Off (ours): it perturbs what measures an object, its features and offsets, and what an object is stays
-    exact (ours' features have no such entries). Chosen on development seeds (docs/design/selection.md)."""
-    attention_log_scale: bool = False
-    """Learned selection only: attention's logits times the log of the number of candidates (a scalable
-    softmax), so that a test task's many objects do not spread what a training task's few sharpened. Tried
-    on development seeds (docs/design/selection.md)."""
     q_ensemble: int = setting(1, low=1)
     """Q-networks fitted side by side, Q = their minimum (2: clipped double Q; the paper: 1)."""
     reset_optimizer: bool = False

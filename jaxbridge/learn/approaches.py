@@ -13,8 +13,14 @@ from dataclasses import dataclass
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.bridges import Bridge, PurePlanningBridge, RandomBridge
 from jaxbridge.core.episode import Controls, observation_size
-from jaxbridge.core.observations import CLOSEST_OBJECT, FEATURES, FULL_STATE, OBJECT_TOKENS
+from jaxbridge.core.learner_settings import Normalise
+from jaxbridge.core.observations import (CLOSEST_OBJECT, FEATURES, FULL_STATE, OBJECT_TOKENS, robot_features,
+                                         token_position, token_width)
+from jaxbridge.core.signatures import signature_members, signature_shape
+from jaxbridge.core.token_settings import AttentionDistance
+from jaxbridge.learn.object_q import ObjectQNetwork
 from jaxbridge.learn.q_bridge import QBridge, QNetwork
+from jaxbridge.learn.signature_q import SignatureQNetwork
 
 
 class BridgeKind(enum.Enum):
@@ -64,6 +70,26 @@ class Approach:
         if self.bridge is BridgeKind.RANDOM:
             return RandomBridge(env, explore_ground_operators)
         return PurePlanningBridge(env)
+
+    def q_network(self, config, env: NoveltyEnv) -> QNetwork | ObjectQNetwork | SignatureQNetwork:
+        """The Q-network its bridge fits, with `config`'s learner's widths: over the observation vector, over
+        object tokens (learned selection, with `config.tokens`), or one per failure signature."""
+        s, tokens = config.learner, config.tokens
+        if (self.controls.observation.tokens or self.per_signature) and s.normalise is not Normalise.NONE:
+            what = "object tokens" if self.controls.observation.tokens else "inputs"
+            raise ValueError(f"approach {self.name} does not scale its {what}: no normalise")
+        if self.per_signature:
+            return SignatureQNetwork(signature_shape(env), signature_members(env), env.num_skills + 2, s.hidden_sizes,
+                                     s.activation, s.output_init, ensemble=s.q_ensemble)
+        if not self.controls.observation.tokens:
+            return QNetwork(s.hidden_sizes, s.q_ensemble, s.activation, s.output_init,
+                            normalise=s.normalise is Normalise.MINMAX)
+        at_stall = tokens.attention_distance is AttentionDistance.STALL
+        left_out = None if tokens.attention_robot_features else robot_features(env)
+        return ObjectQNetwork(token_width(env), env.num_skills + 2, token_position(env, at_stall),
+                              tokens.attention_preference, left_out, tokens.attention_fixed_penalty,
+                              tokens.attention_log_scale, s.hidden_sizes, s.activation, s.output_init,
+                              ensemble=s.q_ensemble)
 
     def observation_size(self, env: NoveltyEnv) -> int:
         """The width of what its bridge sees on `env`."""

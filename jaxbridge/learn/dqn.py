@@ -13,18 +13,15 @@ from flax import struct
 
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
-from jaxbridge.core.learner_settings import AttentionDistance, DQNSettings, Normalise, PolyakPer, TargetInit
-from jaxbridge.core.observations import robot_features, token_measured_entries, token_position, token_width
-from jaxbridge.core.signatures import signature_members, signature_shape
+from jaxbridge.core.learner_settings import DQNSettings, PolyakPer, TargetInit
+from jaxbridge.core.observations import token_measured_entries
 from jaxbridge.learn.approaches import get_approach
 from jaxbridge.learn.hyper import Hyper
-from jaxbridge.learn.object_q import ObjectQNetwork
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import (QNetwork, StateSplit, TaskPart, at_task, batch_input, best_candidate,
                                       candidate_skills, encode_action, input_rows, input_size, task_state_split,
                                       with_input_rows)
 from jaxbridge.learn.replay import ReplayBuffer, add, init_buffer, sample_indices
-from jaxbridge.learn.signature_q import SignatureQNetwork
 from jaxbridge.learn.transitions import Transition, empty_transitions, for_buffer, successor_features
 
 
@@ -137,37 +134,15 @@ class DQN:
         return state.buffer.size
 
 
-def q_network(config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork | SignatureQNetwork:
-    """The approach's Q-network: over its observation vector, over object tokens (learned selection), or one
-    per failure signature."""
-    approach, s = get_approach(config.approach), config.learner
-    if approach.per_signature:
-        if s.normalise is not Normalise.NONE:
-            raise ValueError(f"approach {config.approach} does not scale its inputs: no normalise")
-        return SignatureQNetwork(signature_shape(env), signature_members(env), env.num_skills + 2, s.hidden_sizes,
-                                 s.activation, s.output_init, ensemble=s.q_ensemble)
-    if not approach.controls.observation.tokens:
-        return QNetwork(s.hidden_sizes, s.q_ensemble, s.activation, s.output_init,
-                        normalise=s.normalise is Normalise.MINMAX)
-    if s.normalise is not Normalise.NONE:
-        raise ValueError(f"approach {config.approach} does not scale its object tokens: no normalise")
-    at_stall = s.attention_distance is AttentionDistance.STALL
-    left_out = None if s.attention_robot_features else robot_features(env)
-    return ObjectQNetwork(token_width(env), env.num_skills + 2, token_position(env, at_stall),
-                          s.attention_preference, left_out, s.attention_fixed_penalty,
-                          s.attention_log_scale, s.hidden_sizes, s.activation, s.output_init,
-                          ensemble=s.q_ensemble)
-
-
 def feature_noise_entries(config: TrainConfig, env: NoveltyEnv) -> np.ndarray | None:
     """The observation entries `feature_noise` perturbs: all (None), or of object tokens their measured
     entries alone unless `attention_kind_noise` (core.observations.token_measured_entries)."""
     tokens = get_approach(config.approach).controls.observation.tokens
-    return token_measured_entries(env) if tokens and not config.learner.attention_kind_noise else None
+    return token_measured_entries(env) if tokens and not config.tokens.attention_kind_noise else None
 
 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
-    return DQN(env, config, q_network(config, env), clipped_adam(), num_features, split, choose_fit(config),
+    return DQN(env, config, get_approach(config.approach).q_network(config, env), clipped_adam(), num_features, split, choose_fit(config),
                feature_noise_entries(config, env))
 
 

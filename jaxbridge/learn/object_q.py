@@ -44,9 +44,9 @@ class ObjectAttention(nn.Module):
 
     keys: int  # the width of a token's key and the robot's query
     position: slice
-    preference: float  # the learner's attention_preference
-    fixed_penalty: bool  # the learner's attention_fixed_penalty: the penalty stays at `near`
-    log_scale: bool  # the learner's attention_log_scale
+    preference: float  # the token network's attention_preference (core/token_settings.py)
+    fixed_penalty: bool  # its attention_fixed_penalty: the penalty stays at `near`
+    log_scale: bool  # its attention_log_scale
     near: float = 16.0
 
     @nn.compact
@@ -120,7 +120,7 @@ class ObjectQNetwork(nn.Module):
     position: tuple[int, int]
     preference: float
     robot_features: tuple[int, int] | None  # the robot's own features, left out of the MLP's input (None: none)
-    fixed_penalty: bool  # the learner's attention_* settings, declared there
+    fixed_penalty: bool  # the token network's attention_* settings, declared there
     log_scale: bool
     hidden_sizes: Sequence[int] = (32, 32)
     activation: str = "leaky_relu"

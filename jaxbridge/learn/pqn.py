@@ -21,7 +21,8 @@ from flax import struct
 from envs_jax.base import BridgeObs, NoveltyEnv
 from jaxbridge.core.config import ParamSamples, TrainConfig
 from jaxbridge.core.learner_settings import Normalise, PQNSettings
-from jaxbridge.learn.dqn import feature_noise_entries, perturbed, q_network
+from jaxbridge.learn.approaches import get_approach
+from jaxbridge.learn.dqn import feature_noise_entries, perturbed
 from jaxbridge.learn.hyper import Hyper
 from jaxbridge.learn.optim import clipped_adam
 from jaxbridge.learn.q_bridge import QNetwork, batch_input, best_candidate, candidate_skills, input_size
@@ -57,7 +58,8 @@ class PQN:
         """Double DQN's network with LayerNorm; the same optimiser."""
         if config.learner.normalise is not Normalise.NONE:
             raise ValueError("learner pqn does not support normalise (set by the config or its preset)")
-        return cls(env, config, replace(q_network(config, env), layer_norm=True), clipped_adam(), num_features,
+        net = replace(get_approach(config.approach).q_network(config, env), layer_norm=True)
+        return cls(env, config, net, clipped_adam(), num_features,
                    feature_noise_entries(config, env))
 
     def init(self, key: jax.Array) -> PQNState:
