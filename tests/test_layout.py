@@ -232,3 +232,29 @@ def test_the_settings_and_the_presets_import_nothing_of_each_other():
     config, presets = ROOT / "jaxbridge" / "core" / "config.py", ROOT / "jaxbridge" / "core" / "presets.py"
     assert not any(name.startswith("jaxbridge.core.presets") for name in imported(config))
     assert not any(name.startswith("jaxbridge.core.config") for name in imported(presets))
+
+
+# Every module that declares, resolves, presets, sweeps or migrates a setting; their code (statements, not
+# the docstrings under each field, which are its help) stays small enough to read as one piece.
+SETTINGS_MODULES = ("jaxbridge/core/config.py", "jaxbridge/core/settings.py", "jaxbridge/core/learner_settings.py",
+                    "jaxbridge/core/token_settings.py", "jaxbridge/core/presets.py", "jaxbridge/core/grid.py",
+                    "jaxbridge/learn/hyper.py", "jaxbridge/api/config.py")
+MAX_SETTINGS_CODE = 600
+
+
+def code_lines(path: Path) -> int:
+    """Lines holding code: neither blank, nor a comment, nor part of a docstring."""
+    source = path.read_text()
+    docs = {line for node in ast.walk(ast.parse(source)) if isinstance(node, ast.Expr)
+            and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)
+            for line in range(node.lineno, node.end_lineno + 1)}
+    return sum(1 for i, text in enumerate(source.splitlines(), 1)
+               if text.strip() and not text.strip().startswith("#") and i not in docs)
+
+
+def test_the_settings_code_stays_within_its_cap():
+    counts = {name: code_lines(ROOT / name) for name in SETTINGS_MODULES}
+    assert all(n > 0 for n in counts.values()) and sum(counts.values()) <= MAX_SETTINGS_CODE, counts
+    declaring = {str(path.relative_to(ROOT)) for _, path in modules() if any(
+        isinstance(node, ast.Call) and getattr(node.func, "id", None) == "setting" for node in ast.walk(ast.parse(path.read_text())))}
+    assert declaring and declaring <= set(SETTINGS_MODULES), f"settings declared outside the cap: {declaring - set(SETTINGS_MODULES)}"
