@@ -5,10 +5,13 @@
 
 Each commit is checked out into its own worktree and trains the same short experiment there
 (`train.py --env E --approaches ... --first-seed F --num-seeds N --cycles C`); prints, per approach, "identical" or
-"differs" (with the first differing line), and exits 1 if any differs.
+"differs" (with the first differing line), and exits 1 if any differs. A column only one commit writes (a metric
+added since) is left out of the comparison, and the line says so.
 """
 from __future__ import annotations
 
+import csv
+import io
 import sys
 import tempfile
 from pathlib import Path
@@ -27,6 +30,15 @@ def first_difference(a: str, b: str) -> str:
         if x != y:
             return f"line {i}: {x!r} vs {y!r}"
     return f"lengths {len(a.splitlines())} vs {len(b.splitlines())} lines"
+
+
+def shared_columns(a: str, b: str) -> tuple[str, str, list[str]]:
+    """Two metrics.csv texts cut to the columns both have, in A's order, and the columns left out."""
+    rows_a, rows_b = (list(csv.DictReader(io.StringIO(text))) for text in (a, b))
+    head_a, head_b = (text.splitlines()[0].split(",") if text else [] for text in (a, b))
+    shared = [c for c in head_a if c in head_b]
+    cut = lambda rows: "\n".join([",".join(shared), *(",".join(row[c] for c in shared) for row in rows)])
+    return cut(rows_a), cut(rows_b), [c for c in head_a + head_b if c not in shared]
 
 
 def main(argv=None) -> int:
@@ -50,10 +62,11 @@ def main(argv=None) -> int:
             runs[side] = {p.parent.name: p.read_text() for p in (out / "x").glob("*/metrics.csv")}
         differ = 0
         for name in sorted(runs["A"]):
-            a, b = runs["A"][name], runs["B"].get(name, "")
+            a, b, left_out = shared_columns(runs["A"][name], runs["B"].get(name, ""))
             same = a == b
             differ += not same
-            print(f"{args.env} {name}: " + ("identical" if same else f"differs ({first_difference(a, b)})"))
+            print(f"{args.env} {name}: " + ("identical" if same else f"differs ({first_difference(a, b)})")
+                  + (f" (not compared: {', '.join(left_out)}, written by one commit only)" if left_out else ""))
     return 1 if differ else 0
 
 
