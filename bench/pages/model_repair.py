@@ -91,9 +91,22 @@ def composed(env: str, test: dict, last: int, alone: list[dict], extra: dict) ->
     invented = [r for r in alone if r["approach"] == INVENTED]
     failed = [r["tasks"] for r in invented if float(r["mean"]) < BARS["alone"]]
     sentences.append(f"The repaired planner alone (no bridge) solves {BARS['alone']:g} or more on "
-                     + (f"every task set it met ({', '.join(r['tasks'] for r in invented)})." if not failed
-                        else f"{len(invented) - len(failed)} of {len(invented)} task sets; below it on {', '.join(failed)}."))
+                     + (f"every task set it met ({task_sets_text([r['tasks'] for r in invented])})." if not failed
+                        else f"{len(invented) - len(failed)} of {len(invented)} task sets; below it on {task_sets_text(failed)}."))
     return " ".join(sentences)
+
+
+def task_sets_text(names: list[str]) -> str:
+    """Task sets in words, a sweep's sizes together ("sweep: 1 doors", ..., "sweep: 10 doors": "the sweep at 1
+    to 10 doors"; sizes with gaps listed: "the sweep at 6, 8 and 12 doors")."""
+    sizes = [name.removeprefix("sweep: ").split(" ", 1) for name in names if name.startswith("sweep: ")]
+    others = [name for name in names if not name.startswith("sweep: ")]
+    counts = sorted(int(count) for count, _ in sizes)
+    if not counts:
+        return ", ".join(others)
+    every = counts == list(range(counts[0], counts[-1] + 1)) and len(counts) > 2
+    at = f"{counts[0]} to {counts[-1]}" if every else " and ".join([", ".join(map(str, counts[:-1])), str(counts[-1])][-len(counts):])
+    return ", ".join(others + [f"the sweep at {at} {sizes[0][1]}"])
 
 
 # The timing's ratios in the order it prints them: cycles 2 on (ours' one compilation left out, the repair
