@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 from envs_jax.base import NoveltyEnv
 from jaxbridge.core.bridges import Bridge, PurePlanningBridge, RandomBridge
+from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.episode import Controls, observation_size
 from jaxbridge.core.learner_settings import Normalise
 from jaxbridge.core.observations import (CLOSEST_OBJECT, FEATURES, FULL_STATE, OBJECT_TOKENS, robot_features,
@@ -71,7 +72,7 @@ class Approach:
             return RandomBridge(env, explore_ground_operators)
         return PurePlanningBridge(env)
 
-    def q_network(self, config, env: NoveltyEnv) -> QNetwork | ObjectQNetwork | SignatureQNetwork:
+    def q_network(self, config: TrainConfig, env: NoveltyEnv) -> QNetwork | ObjectQNetwork | SignatureQNetwork:
         """The Q-network its bridge fits, with `config`'s learner's widths: over the observation vector, over
         object tokens (learned selection, with `config.tokens`), or one per failure signature."""
         s, tokens = config.learner, config.tokens
