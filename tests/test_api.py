@@ -64,8 +64,9 @@ def test_docs_api_md_documents_every_public_name_and_help_explains_the_calls():
 
 
 def test_a_training_builds_each_programs_setup_once(monkeypatch, tmp_path):
-    """prepare builds the setups; the network check, the learner contract and the training read them (the
-    memory estimate reads one-seed shapes first, so a run too big is refused before its tasks are built)."""
+    """prepare builds the setups; the memory estimate, the network check, the learner contract and the
+    training read them (before them, the estimate's lower bound builds a learner on the first seed's tasks,
+    no setup)."""
     from jaxbridge.learn.setup import Setup
 
     built, init = [], Setup.__init__
@@ -76,8 +77,7 @@ def test_a_training_builds_each_programs_setup_once(monkeypatch, tmp_path):
     monkeypatch.setattr(Setup, "__init__", counted)
     whole = lambda: sorted(approach for approach, seeds in built if seeds == 2)
     training = jaxbridge.prepare("light_switch_door", ["pure_planning", "random"], seeds=2, cycles=1, out=tmp_path)
-    assert whole() == ["pure_planning", "random"]
-    assert sorted(a for a, seeds in built if seeds == 1) == ["pure_planning", "random"]  # the memory estimate's
+    assert sorted(built) == [("pure_planning", 2), ("random", 2)]  # one setup each, none for the memory estimate
     experiment = training.run()
     assert whole() == ["pure_planning", "random"] and set(experiment.summaries) == {"pure_planning", "random"}
     # a sweep over a leaf hyperparameter: one program per approach, one setup each
@@ -91,13 +91,14 @@ class FirstCycle(Exception):
     """Raised where the first cycle would start: what came before it is the training's preparation."""
 
 
-def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_draws_each_seeds_tasks_and_compiles_each_task_once(
+def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_draws_each_seeds_tasks_compiles_each_task_and_builds_each_setup_once(
         monkeypatch, tmp_path):
     import train
     from envs_jax.coffee.env import Coffee  # no plan_bound: the memory estimate compiles tasks as well
     from jaxbridge.api import config as api_config, training as api_training
     from jaxbridge.core import tasks
     from jaxbridge.learn.online import Cycle
+    from jaxbridge.learn.setup import Setup
 
     counts: dict = {}
 
@@ -112,6 +113,7 @@ def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_draws_ea
     draw = Coffee.train_tasks.__func__
     monkeypatch.setattr(Coffee, "train_tasks", classmethod(counting(lambda cls, seed, _: seed, draw)))
     monkeypatch.setattr(tasks, "compile_task", counting(lambda env, spec: ("compiled", spec), tasks.compile_task))
+    monkeypatch.setattr(Setup, "__init__", counting(lambda setup, config, *rest: ("setup", config.approach), Setup.__init__))
     tasks._drawn_train_tasks.cache_clear()  # earlier tests of this process drew and compiled these seeds' tasks too
     tasks.compiled_task.cache_clear()
     def first_cycle(self, learners):
@@ -122,4 +124,5 @@ def test_train_py_to_its_first_cycle_resolves_the_env_checks_the_config_draws_ea
                     "--cycles", "1", "--episodes-per-cycle", "2", "--num-test-tasks", "2", "--test-protocol", "authors",
                     "--workers", "1", "--no-progress", "--out", str(tmp_path)])
     specs = tasks.training_specs(Coffee, [3, 4], 2)[0] + tasks.evaluation_specs(Coffee, [3, 4], 2, "authors")[0]
-    assert counts == {"env resolved": 1, "config checked": 1, 3: 1, 4: 1, **{("compiled", spec): 1 for spec in specs}}
+    assert counts == {"env resolved": 1, "config checked": 1, 3: 1, 4: 1, **{("compiled", spec): 1 for spec in specs},
+                      **{("setup", approach): 1 for approach in ("ours", "random", "no_callplanner")}}

@@ -174,9 +174,10 @@ def prepare(env: EnvLike | None = None, approaches: str | Sequence[str] | None =
              else _approach_list(approaches))
     hyper_grid = _sweep_grid(sweep, config)
     with _refusing_setups(config):
-        _check_memory(config, env_cls, names, hyper_grid, workers, max_memory)
+        _check_memory(config, env_cls, names, hyper_grid, workers, max_memory)  # a lower bound, before any draw
     _check_reachable(config, env_cls)
     experiment = _plan(config, names, hyper_grid, env_cls)
+    _check_memory(config, env_cls, names, hyper_grid, workers, max_memory, experiment)  # the setups' own shapes
     temporary = None if out is not None else Path(tempfile.mkdtemp(prefix="jaxbridge-"))
     run_dir, replaced, lock = Path(out if out is not None else temporary) / (name or env_cls.name), None, None
     try:
@@ -312,15 +313,19 @@ def _sweep_text(value) -> str:
 
 
 def _check_memory(config: TrainConfig, env_cls, names: list[str], hyper_grid: dict[str, tuple], workers: int | None,
-                  max_memory: float | None) -> None:
+                  max_memory: float | None, experiment=None) -> None:
     """Refuse a run whose memory estimate exceeds `max_memory` GiB (default: what is available), before
-    anything of its size is built (run/memory.py)."""
+    anything of its size is built (run/memory.py): from `experiment`'s setups, the ones it will run, or
+    before they are built from a lower bound that draws no seed's tasks but the first's."""
     from jaxbridge.learn.devices import default_workers
     from jaxbridge.run import memory
     from jaxbridge.run.experiments import program_names, runs
 
-    named = runs(config, names, hyper_grid)
-    programs = [(named[group[0]], len(group)) for group in program_names(named)]
+    if experiment is None:
+        named = runs(config, names, hyper_grid)
+        programs = [(named[group[0]], len(group), None) for group in program_names(named)]
+    else:
+        programs = [(experiment.named[p.names[0]], len(p.names), p.setup) for p in experiment.programs]
     memory.check_training(config, env_cls, programs, workers or default_workers(programs),
                           None if max_memory is None else int(max_memory * 2**30))
 

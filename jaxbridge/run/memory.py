@@ -2,7 +2,6 @@
 in seconds instead of swapping for half an hour."""
 from __future__ import annotations
 
-import dataclasses
 import os
 
 import jax
@@ -12,7 +11,7 @@ from envs_jax import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.tasks import TaskBatch, compiled_task, evaluation_specs, make_batch, test_specs, train_specs, training_specs
 from jaxbridge.learn.approaches import get_approach
-from jaxbridge.learn.setup import make_setup
+from jaxbridge.learn.setup import Setup, make_learner
 from jaxbridge.run.model_repair import KEPT_SEGMENTS
 from jaxbridge.utils.errors import InputError
 from planner.tables import table_shape
@@ -55,10 +54,19 @@ def tree_bytes(tree) -> int:
     return sum(nbytes(x) for x in jax.tree.leaves(tree))
 
 
-def state_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
-    """One seed's learner state for `config.approach`, from abstract shapes (nothing is allocated), on a
-    one-seed setup: a run too big to fit is refused before its seeds' tasks are built."""
-    return tree_bytes(jax.eval_shape(make_setup(dataclasses.replace(config, num_seeds=1), env_cls).init_learners))
+def state_bytes(config: TrainConfig, env_cls: type[NoveltyEnv], setup: Setup | None = None) -> int:
+    """One seed's learner state for `config.approach`, from abstract shapes (nothing is allocated): of
+    `setup`, the one the program runs; before any is built, a lower bound, a learner on the first seed's
+    training tasks alone (the run's env holds every seed's, each dimension as large or larger), so that a
+    run too big to fit is refused before its seeds' tasks are drawn. A low-level baseline's state needs its
+    setup: 0 before one."""
+    if setup is not None:
+        return tree_bytes(jax.eval_shape(setup.init_learners)) // config.num_seeds
+    approach = get_approach(config.approach)
+    if approach.low_level:
+        return 0
+    env = env_cls.for_tasks(train_specs(env_cls, config.first_seed, config.episodes_per_cycle)).with_quirks(config.env_quirks)
+    return tree_bytes(jax.eval_shape(make_learner(config, approach, env).init, jax.random.key(config.first_seed)))
 
 
 def segments_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
@@ -73,7 +81,7 @@ def segments_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
 def task_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
     """One seed's training and test tasks with their plan tables (the first seed's), which every approach
     of an experiment shares; compiled by the envs the run's batches will have (each holds every seed's
-    tasks), so the batches reuse these compilations (core/tasks.compiled_task)."""
+    tasks, drawn by then for the setups), so the batches reuse these compilations (core/tasks.compiled_task)."""
     seed, episodes = config.first_seed, config.episodes_per_cycle
     kinds = [(train_specs(env_cls, seed, episodes), training_specs(env_cls, config.seeds, episodes)[0]),
              (test_specs(env_cls, seed, config.num_test_tasks, config.test_protocol),
@@ -103,16 +111,18 @@ def model_batches_fit(batch: TaskBatch, limit: int | None = None, lower: str = "
     return fit
 
 
-def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], programs: list[tuple[TrainConfig, int]],
+def check_training(config: TrainConfig, env_cls: type[NoveltyEnv], programs: list[tuple[TrainConfig, int, Setup | None]],
                    workers: int, limit: int | None = None) -> int:
-    """The estimate for an experiment's programs (each its first run's config and its number of runs,
-    trained side by side) trained `workers` at a time (the largest together); TooBig if it exceeds
-    `limit` bytes (default: the memory available now)."""
+    """The estimate for an experiment's programs (each its first run's config, its number of runs, trained
+    side by side, and its setup: None before the setups are built, for `state_bytes`' lower bound) trained
+    `workers` at a time (the largest together); TooBig if it exceeds `limit` bytes (default: the memory
+    available now)."""
     limit, what = limit_bytes(limit)
-    approaches = list(dict.fromkeys(c.approach for c, _ in programs))
-    states = sorted((state_bytes(c, env_cls) * runs for c, runs in programs), reverse=True)
-    repairs = sum(segments_bytes(c, env_cls) * runs for c, runs in programs)
-    per_seed = STATE_COPIES * sum(states[:max(1, workers)]) + task_bytes(config, env_cls) + repairs
+    approaches = list(dict.fromkeys(c.approach for c, _, _ in programs))
+    states = sorted((state_bytes(c, env_cls, setup) * runs for c, runs, setup in programs), reverse=True)
+    repairs = sum(segments_bytes(c, env_cls) * runs for c, runs, _ in programs)
+    built = all(setup is not None for _, _, setup in programs)  # else a lower bound: no seed's tables but the first's drawn
+    per_seed = STATE_COPIES * sum(states[:max(1, workers)]) + (task_bytes(config, env_cls) if built else 0) + repairs
     need, fit = totals(config.num_seeds, per_seed, limit)
     if need > limit:
         raise TooBig(f"this run needs about {need / 2**30:.1f} GiB ({per_seed / 2**20:.1f} MiB per seed for "
