@@ -104,8 +104,10 @@ def task_sets_text(names: list[str]) -> str:
     counts = sorted(int(count) for count, _ in sizes)
     if not counts:
         return ", ".join(others)
-    every = counts == list(range(counts[0], counts[-1] + 1)) and len(counts) > 2
-    at = f"{counts[0]} to {counts[-1]}" if every else " and ".join([", ".join(map(str, counts[:-1])), str(counts[-1])][-len(counts):])
+    if len(counts) > 2 and counts == list(range(counts[0], counts[-1] + 1)):
+        at = f"{counts[0]} to {counts[-1]}"
+    else:
+        at = " and ".join(filter(None, [", ".join(map(str, counts[:-1])), str(counts[-1])]))
     return ", ".join(others + [f"the sweep at {at} {sizes[0][1]}"])
 
 

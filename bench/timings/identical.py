@@ -34,8 +34,7 @@ def first_difference(a: str, b: str) -> str:
 
 def shared_columns(a: str, b: str) -> tuple[str, str, list[str]]:
     """Two metrics.csv texts cut to the columns both have, in A's order, and the columns left out."""
-    rows_a, rows_b = (list(csv.DictReader(io.StringIO(text))) for text in (a, b))
-    head_a, head_b = (text.splitlines()[0].split(",") if text else [] for text in (a, b))
+    (rows_a, head_a), (rows_b, head_b) = ((list(r), r.fieldnames or []) for r in (csv.DictReader(io.StringIO(t)) for t in (a, b)))
     shared = [c for c in head_a if c in head_b]
     cut = lambda rows: "\n".join([",".join(shared), *(",".join(row[c] for c in shared) for row in rows)])
     return cut(rows_a), cut(rows_b), [c for c in head_a + head_b if c not in shared]

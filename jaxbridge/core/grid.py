@@ -1,7 +1,8 @@
 """Hyperparameter grids: `train.py --sweep key=v1,v2 --sweep key2=...` as the settings of one experiment.
 
 A setting is a set of config overrides (one value per swept key: a TrainConfig field, or one of its
-learner's or its token network's, by name); the grid is their cartesian product, in the order the keys and values were given.
+learner's or its token network's, by name); the grid is their cartesian product, in the order the keys
+and values were given.
 Settings that differ only in leaf hyperparameters (`setting(..., leaf=True)`, core/settings.py) share one
 compiled program; any other key (n_sample, widths, updates per cycle, ...) makes programs of its own
 (`program_groups`).

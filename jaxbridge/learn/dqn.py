@@ -142,8 +142,8 @@ def feature_noise_entries(config: TrainConfig, env: NoveltyEnv) -> np.ndarray | 
 
 
 def make_dqn(config: TrainConfig, env: NoveltyEnv, num_features: int, split: StateSplit | None = None) -> DQN:
-    return DQN(env, config, get_approach(config.approach).q_network(config, env), clipped_adam(), num_features, split, choose_fit(config),
-               feature_noise_entries(config, env))
+    net = get_approach(config.approach).q_network(config, env)
+    return DQN(env, config, net, clipped_adam(), num_features, split, choose_fit(config), feature_noise_entries(config, env))
 
 
 def stored_transitions(dqn: DQN, transitions: Transition) -> Transition:

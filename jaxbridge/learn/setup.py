@@ -101,11 +101,15 @@ def make_setup(config: TrainConfig, env_cls: type[NoveltyEnv] | None = None) -> 
     env_cls = env_cls or env_class(config.env)
     approach = get_approach(config.approach)
     approach.check_env(env_cls)
-    train_env = env_cls.for_tasks(training_specs(env_cls, config.seeds, config.episodes_per_cycle)[0]
-                                  ).with_quirks(config.env_quirks)
+    train_env = training_env(config, env_cls, config.seeds)
     test_env = env_cls.for_tasks(evaluation_specs(env_cls, config.seeds, config.num_test_tasks, config.test_protocol)[0]
                                  ).with_quirks(config.env_quirks)
     return Setup(config, env_cls, approach, train_env, test_env, make_learner(config, approach, train_env))
+
+
+def training_env(config: TrainConfig, env_cls: type[NoveltyEnv], seeds: list[int]) -> NoveltyEnv:
+    """The env sized to `seeds`' training tasks, with the config's quirks: the learners' shapes follow it."""
+    return env_cls.for_tasks(training_specs(env_cls, seeds, config.episodes_per_cycle)[0]).with_quirks(config.env_quirks)
 
 
 def make_learner(config: TrainConfig, approach: Approach, train_env: NoveltyEnv) -> QLearner:

@@ -11,7 +11,7 @@ from envs_jax import NoveltyEnv
 from jaxbridge.core.config import TrainConfig
 from jaxbridge.core.tasks import TaskBatch, compiled_task, evaluation_specs, make_batch, test_specs, train_specs, training_specs
 from jaxbridge.learn.approaches import get_approach
-from jaxbridge.learn.setup import Setup, make_learner
+from jaxbridge.learn.setup import Setup, make_learner, training_env
 from jaxbridge.run.model_repair import KEPT_SEGMENTS
 from jaxbridge.utils.errors import InputError
 from planner.tables import table_shape
@@ -65,7 +65,7 @@ def state_bytes(config: TrainConfig, env_cls: type[NoveltyEnv], setup: Setup | N
     approach = get_approach(config.approach)
     if approach.low_level:
         return 0
-    env = env_cls.for_tasks(train_specs(env_cls, config.first_seed, config.episodes_per_cycle)).with_quirks(config.env_quirks)
+    env = training_env(config, env_cls, [config.first_seed])
     return tree_bytes(jax.eval_shape(make_learner(config, approach, env).init, jax.random.key(config.first_seed)))
 
 
@@ -74,7 +74,7 @@ def segments_bytes(config: TrainConfig, env_cls: type[NoveltyEnv]) -> int:
     approach: each call two states of the object view, and about a kilobyte of Python around each."""
     if not get_approach(config.approach).repairs_model:
         return 0
-    env = env_cls.for_tasks(train_specs(env_cls, config.first_seed, config.episodes_per_cycle))
+    env = training_env(config, env_cls, [config.first_seed])
     return KEPT_SEGMENTS * 2 * (env.num_objects * (env.object_width + 3) * 4 + 1024)
 
 
